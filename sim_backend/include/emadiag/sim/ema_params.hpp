@@ -1,0 +1,72 @@
+#pragma once
+// Parameters of the reference actuator EMA-REF-1 (ema-reference.md section 1) and the
+// effects beyond the datasheet (issue 2 part 5). Every field is validated; JSON in and out.
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+namespace emadiag::sim {
+
+/// Effects beyond the datasheet. All are off (zero) by default.
+struct Effects {
+    double viscous_nm_s_rad = 0.0;          ///< viscous friction F_v, motor side
+    double stribeck_amplitude_nm = 0.0;     ///< extra friction at low speed, motor side
+    double stribeck_speed_rad_s = 50.0;     ///< Stribeck characteristic speed, motor side
+    double backlash_rad = 0.0;              ///< total free play, motor side
+    double spall_amplitude_nm = 0.0;        ///< position-localised friction increase, motor side
+    double spall_center_deg = 0.0;          ///< surface angle of the spall centre
+    double spall_width_deg = 1.0;           ///< Gaussian half-width (1 sigma) of the spall, surface angle
+    double ripple_amplitude_nm = 0.0;       ///< motor torque ripple amplitude
+    double ripple_periods_per_rev = 6.0;    ///< ripple periods per motor revolution
+    double current_gain_error = 0.0;        ///< measured I = (1 + error) * true I
+    double hinge_offset_nm = 0.0;           ///< measured H = true H + offset (surface side)
+    double true_inertia_kgm2 = 0.0;         ///< plant inertia; 0 means "as the datasheet J"
+
+    [[nodiscard]] bool any() const;
+    /// Names accepted by set() and reported as effect_<name> in CSV headers.
+    static const std::vector<std::string>& names();
+    /// Sets one effect by name; throws SimError naming the effect on an unknown name.
+    void set(const std::string& name, double value);
+    [[nodiscard]] double get(const std::string& name) const;
+};
+
+/// Datasheet parameters (ema-reference.md section 1), SI units.
+struct EmaParams {
+    double v_dc_v = 270.0;
+    double r_ohm = 1.0;
+    double l_h = 2.5e-3;
+    double k_t_nm_per_a = 0.2;
+    double i_max_a = 20.0;
+    double t_max_nm = 4.0;
+    double w_max_rad_s = 838.0;
+    double j_kgm2 = 1.65e-4;
+    double tau = 800.0;
+    double k_theta_per_s = 30.0;
+    double k_w_a_s_per_rad = 0.25;
+    double stop_deg = 25.0;
+    double fdj_nm = 0.08;
+    double fsj_nm = 0.12;
+    double eta_o = 0.85;
+    double eta_a = 0.823788;  ///< overwritten from eta_o by eq. (4) unless set explicitly
+    double dt_s = 1e-6;
+    Effects effects;
+
+    /// Throws SimError listing every invalid field with its value and allowed range.
+    void validate() const;
+    /// Plant inertia: effects.true_inertia_kgm2 when set, else the datasheet J.
+    [[nodiscard]] double plant_inertia_kgm2() const;
+
+    /// The datasheet, with eta_a from eq. (4).
+    static EmaParams datasheet();
+    /// Reads a JSON object; unknown keys and wrong types are errors. Missing keys keep the datasheet.
+    static EmaParams from_json(const nlohmann::json& j, const std::string& where = "params");
+    static EmaParams from_json_file(const std::string& path);
+    [[nodiscard]] nlohmann::json to_json() const;
+};
+
+/// eq. (4): eta_A from eta_O and the gear ratio tau.
+[[nodiscard]] double eta_a_from_eta_o(double eta_o, double tau);
+/// Inverse of eq. (4): eta_O from eta_A and tau.
+[[nodiscard]] double eta_o_from_eta_a(double eta_a, double tau);
+
+}  // namespace emadiag::sim

@@ -1,0 +1,108 @@
+#pragma once
+// The EMA-REF-1 plant and controller (ema-reference.md sections 3 to 7), integrated at dt.
+// One step function serves the scalar and the batched paths; they differ only in lane width.
+#include "emadiag/sim/ema_params.hpp"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace emadiag::sim {
+
+enum class LoadCase { A, AExt, B };
+enum class Sequence { Dyn, Brk, Sweep };
+enum class NoiseProfile { None, Typical };
+
+[[nodiscard]] std::string to_string(LoadCase c);
+[[nodiscard]] std::string to_string(Sequence s);
+[[nodiscard]] std::string to_string(NoiseProfile n);
+/// Parse "A", "A-ext", "B" (case-insensitive); throws SimError naming the value.
+[[nodiscard]] LoadCase parse_load_case(const std::string& s);
+/// Parse "dyn", "brk", "sweep".
+[[nodiscard]] Sequence parse_sequence(const std::string& s);
+/// Parse "none", "typical".
+[[nodiscard]] NoiseProfile parse_noise(const std::string& s);
+
+/// Default length of a sequence: DYN and SWEEP 0.5 s, BRK 0.8 s (ema-reference.md section 5).
+[[nodiscard]] double default_duration_s(Sequence s);
+/// Surface-angle command in degrees at time t (section 5). BRK commands 0.
+[[nodiscard]] double command_deg(Sequence s, double t_s);
+
+/// Samples per controller period: 0.5 ms at dt (section 6).
+inline constexpr double kSamplePeriodS = 5e-4;
+/// Aircraft update period in case B (section 3 step 7).
+inline constexpr double kAircraftPeriodS = 1e-4;
+
+/// Sensor resolutions; they are the CAN telemetry resolutions (can_dbc/ema.dbc).
+inline constexpr double kCurrentResolutionA = 0.002;
+inline constexpr double kSpeedResolutionRadS = 0.05;
+inline constexpr double kThetaResolutionRad = 0.001;
+inline constexpr double kHingeResolutionNm = 0.5;
+/// Noise profile `typical` (section 6).
+inline constexpr double kTypicalSigmaCurrentA = 0.02;
+inline constexpr double kTypicalSigmaSpeedRadS = 0.2;
+inline constexpr double kTypicalSigmaThetaRad = 1e-3;
+inline constexpr double kTypicalSigmaHingeNm = 1.0;
+
+struct SimConfig {
+    EmaParams params = EmaParams::datasheet();
+    LoadCase load_case = LoadCase::B;
+    Sequence sequence = Sequence::Dyn;
+    NoiseProfile noise = NoiseProfile::None;
+    std::uint64_t seed = 1;
+    double duration_s = 0.0;  ///< 0 means default_duration_s(sequence)
+    bool record_truth = false;  ///< also record per-sample exact friction/motor torque and energies
+};
+
+/// One 2 kHz sample (section 6): time at the end of the period, period means of I, w and H,
+/// theta_m at the end of the period, and the command.
+struct Sample {
+    double t_s = 0;
+    double current_a = 0;
+    double speed_rad_s = 0;
+    double theta_m_rad = 0;
+    double hinge_moment_nm = 0;
+    double command_deg = 0;
+};
+
+/// What the simulator knows and a measurement does not: period means of the exact torques.
+struct SampleTruth {
+    double friction_torque_nm = 0;  ///< mean T_F (signed, acting against motion)
+    double motor_torque_nm = 0;     ///< mean T_M after saturation and ripple
+    double load_torque_nm = 0;      ///< mean F_R actually applied to the motor side
+    bool stuck_all_period = false;  ///< the shaft was stuck for the whole period
+};
+
+/// Energy accounts over a run, in joules (for the energy-balance check).
+struct EnergyAccount {
+    double electrical_in_j = 0;   ///< sum V I dt
+    double copper_loss_j = 0;     ///< sum R I^2 dt
+    double friction_work_j = 0;   ///< sum T_F w dt
+    double load_work_j = 0;       ///< sum F_R w dt
+    double saturation_loss_j = 0; ///< sum (k_t I - T_M) w dt, torque clipped by T_max
+    double stop_loss_j = 0;       ///< kinetic energy removed by the end stops and the reversal stop
+    double stored_start_j = 0;    ///< 1/2 L I^2 + 1/2 J w^2 at the start
+    double stored_end_j = 0;
+};
+
+struct SimResult {
+    std::vector<Sample> samples;
+    std::vector<SampleTruth> truth;  ///< filled when SimConfig::record_truth
+    EnergyAccount energy;            ///< filled when SimConfig::record_truth
+    bool finite = true;              ///< false when the integration produced NaN or inf
+};
+
+/// One simulation on the scalar path (lane width 1).
+[[nodiscard]] SimResult simulate(const SimConfig& config);
+
+/// Many simulations that differ only in FDJ, FSJ, eta_O, eta_A, noise seed (and noise profile),
+/// run on the batched SIMD path (structure of arrays, kBatchLanes lanes) over `threads` threads.
+/// All other fields of the configs must be equal; throws SimError naming the first that is not.
+[[nodiscard]] std::vector<SimResult> simulate_batch(const std::vector<SimConfig>& configs, unsigned threads = 1);
+inline constexpr int kBatchLanes = 8;
+
+/// Adds the noise profile to samples in place (seeded; Gaussian on top of std::mt19937_64),
+/// then quantises to the sensor resolutions. NoiseProfile::None leaves the samples untouched.
+void apply_noise(std::vector<Sample>& samples, NoiseProfile profile, std::uint64_t seed);
+
+}  // namespace emadiag::sim

@@ -1,0 +1,45 @@
+#pragma once
+// The one record of a test run (ARCHITECTURE.md): the section-6 samples of ema-reference.md,
+// the actuator's constants and the run's metadata. Every source produces it (simulator,
+// CAN recorder, CSV and candump readers); every consumer reads it.
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace emadiag {
+
+struct RunSample {
+    double t_s = 0;
+    double current_a = 0;
+    double speed_rad_s = 0;
+    double theta_m_rad = 0;
+    double hinge_moment_nm = 0;
+    double command_deg = 0;
+};
+
+/// Characterised constants of the actuator (from the identification message or the CSV header).
+struct RunConstants {
+    double k_t_nm_per_a = 0;
+    double j_kgm2 = 0;
+    double tau = 0;
+    double sample_period_s = 0;
+};
+
+struct Run {
+    /// Every `# key=value` header line, in file order (keys are unique).
+    std::vector<std::pair<std::string, std::string>> meta;
+    RunConstants constants;
+    std::string load_case;  ///< "A", "A-ext" or "B"
+    std::string sequence;   ///< "dyn", "brk", "sweep"
+    std::vector<RunSample> samples;
+    /// Columns after the six required ones, by name, one value per sample.
+    std::vector<std::pair<std::string, std::vector<double>>> extra_columns;
+
+    [[nodiscard]] std::optional<std::string> meta_value(const std::string& key) const;
+    void set_meta(const std::string& key, const std::string& value);
+    /// Metadata safe for analysis: everything except the simulator's true_* and effect_* keys.
+    [[nodiscard]] std::vector<std::pair<std::string, std::string>> analysis_meta() const;
+};
+
+}  // namespace emadiag

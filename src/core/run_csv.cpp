@@ -1,0 +1,192 @@
+#include "core/run_csv.hpp"
+
+#include "core/emadiag_error.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+namespace emadiag {
+namespace {
+
+constexpr std::size_t kMaxReportedProblems = 50;
+
+std::string num(double v) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    return buf;
+}
+
+std::vector<std::string> split(const std::string& line, char sep) {
+    std::vector<std::string> out;
+    std::string cur;
+    for (char ch : line) {
+        if (ch == sep) {
+            out.push_back(cur);
+            cur.clear();
+        } else if (ch != '\r') {
+            cur += ch;
+        }
+    }
+    out.push_back(cur);
+    return out;
+}
+
+std::string trim(const std::string& s) {
+    const auto b = s.find_first_not_of(" \t\r");
+    if (b == std::string::npos) return {};
+    const auto e = s.find_last_not_of(" \t\r");
+    return s.substr(b, e - b + 1);
+}
+
+bool parse_double(const std::string& text, double& out) {
+    const std::string t = trim(text);
+    if (t.empty()) return false;
+    const char* first = t.data();
+    const char* last = t.data() + t.size();
+    if (*first == '+') ++first;
+    auto [ptr, ec] = std::from_chars(first, last, out);
+    return ec == std::errc() && ptr == last;
+}
+
+}  // namespace
+
+void write_run_csv(std::ostream& out, const Run& run) {
+    Run copy_meta = run;
+    copy_meta.set_meta("k_t_Nm_per_A", num(run.constants.k_t_nm_per_a));
+    copy_meta.set_meta("J_kgm2", num(run.constants.j_kgm2));
+    copy_meta.set_meta("tau", num(run.constants.tau));
+    copy_meta.set_meta("sample_period_s", num(run.constants.sample_period_s));
+    copy_meta.set_meta("case", run.load_case);
+    copy_meta.set_meta("sequence", run.sequence);
+    for (const auto& [k, v] : copy_meta.meta) out << "# " << k << '=' << v << '\n';
+    out << "t_s,current_A,speed_rad_s,theta_m_rad,hinge_moment_Nm,command_deg";
+    for (const auto& col : run.extra_columns) out << ',' << col.first;
+    out << '\n';
+    for (std::size_t i = 0; i < run.samples.size(); ++i) {
+        const RunSample& s = run.samples[i];
+        out << num(s.t_s) << ',' << num(s.current_a) << ',' << num(s.speed_rad_s) << ',' << num(s.theta_m_rad) << ','
+            << num(s.hinge_moment_nm) << ',' << num(s.command_deg);
+        for (const auto& col : run.extra_columns) out << ',' << num(col.second.at(i));
+        out << '\n';
+    }
+}
+
+void write_run_csv_file(const std::string& path, const Run& run) {
+    // Write to a temporary name and rename, so a failed write never leaves a truncated run behind.
+    const std::string tmp = path + ".part";
+    {
+        std::ofstream out(tmp);
+        if (!out) throw EmadiagError("cannot open " + tmp + " for writing");
+        write_run_csv(out, run);
+        out.flush();
+        if (!out) throw EmadiagError("write to " + tmp + " failed");
+    }
+    if (std::rename(tmp.c_str(), path.c_str()) != 0) throw EmadiagError("cannot rename " + tmp + " to " + path);
+}
+
+Run read_run_csv(std::istream& in, const std::string& name) {
+    Run run;
+    std::vector<std::string> problems;
+    auto problem = [&](std::size_t line, const std::string& msg) {
+        if (problems.size() < kMaxReportedProblems) problems.push_back(name + ":" + std::to_string(line) + ": " + msg);
+    };
+    std::string line;
+    std::size_t line_no = 0;
+    std::vector<std::string> header;
+    std::size_t header_line = 0;
+    while (std::getline(in, line)) {
+        ++line_no;
+        if (line.empty() || line == "\r") continue;
+        if (line[0] == '#') {
+            if (!header.empty()) {
+                problem(line_no, "metadata line after the header row");
+                continue;
+            }
+            const std::string body = trim(line.substr(1));
+            const auto eq = body.find('=');
+            if (eq == std::string::npos) {
+                problem(line_no, "metadata line without '=': expected '# key=value'");
+                continue;
+            }
+            const std::string key = trim(body.substr(0, eq));
+            if (run.meta_value(key)) problem(line_no, "duplicate metadata key '" + key + "'");
+            run.set_meta(key, trim(body.substr(eq + 1)));
+            continue;
+        }
+        if (header.empty()) {
+            header = split(line, ',');
+            header_line = line_no;
+            for (auto& h : header) h = trim(h);
+            for (std::size_t c = 0; c < std::size(kCsvRequiredColumns); ++c) {
+                if (c >= header.size() || header[c] != kCsvRequiredColumns[c]) {
+                    problem(line_no, "header column " + std::to_string(c + 1) + " must be '" + kCsvRequiredColumns[c] +
+                                         "', found '" + (c < header.size() ? header[c] : std::string("<missing>")) + "'");
+                }
+            }
+            for (std::size_t c = std::size(kCsvRequiredColumns); c < header.size(); ++c) {
+                run.extra_columns.emplace_back(header[c], std::vector<double>{});
+            }
+            continue;
+        }
+        const auto cells = split(line, ',');
+        if (cells.size() != header.size()) {
+            problem(line_no, "expected " + std::to_string(header.size()) + " columns, found " + std::to_string(cells.size()));
+            continue;
+        }
+        double v[6];
+        bool ok = true;
+        for (std::size_t c = 0; c < cells.size(); ++c) {
+            double x;
+            if (!parse_double(cells[c], x)) {
+                problem(line_no, "column '" + header[c] + "': '" + cells[c] + "' is not a number");
+                ok = false;
+                continue;
+            }
+            if (c < 6) {
+                v[c] = x;
+            } else {
+                run.extra_columns[c - 6].second.push_back(x);
+            }
+        }
+        if (!ok) continue;
+        run.samples.push_back(RunSample{v[0], v[1], v[2], v[3], v[4], v[5]});
+    }
+    if (header.empty()) problem(line_no, "no header row (expected t_s,current_A,...)");
+    (void)header_line;
+    auto need = [&](const char* key, double& dst, bool positive) {
+        const auto v = run.meta_value(key);
+        if (!v) {
+            problem(1, std::string("missing metadata key '") + key + "'");
+            return;
+        }
+        double x;
+        if (!parse_double(*v, x) || (positive && !(x > 0))) {
+            problem(1, std::string("metadata ") + key + "=" + *v + " is not a positive number");
+            return;
+        }
+        dst = x;
+    };
+    need("k_t_Nm_per_A", run.constants.k_t_nm_per_a, true);
+    need("J_kgm2", run.constants.j_kgm2, true);
+    need("tau", run.constants.tau, true);
+    need("sample_period_s", run.constants.sample_period_s, true);
+    if (auto c = run.meta_value("case")) run.load_case = *c; else problem(1, "missing metadata key 'case'");
+    if (auto s = run.meta_value("sequence")) run.sequence = *s; else problem(1, "missing metadata key 'sequence'");
+    if (!problems.empty()) {
+        std::string msg = "invalid run CSV:";
+        for (const auto& p : problems) msg += "\n  " + p;
+        throw EmadiagError(msg);
+    }
+    return run;
+}
+
+Run read_run_csv_file(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw EmadiagError("cannot open run file " + path);
+    return read_run_csv(in, path);
+}
+
+}  // namespace emadiag
