@@ -1,0 +1,41 @@
+#pragma once
+// The shape every estimator shares (ARCHITECTURE.md "seams"): a function from a Run to estimates
+// with uncertainties. The paper's network and the physics estimator sit side by side behind it.
+#include "core/run.hpp"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace emadiag {
+
+/// Parameter names, in this order everywhere (CLI, JSON, database).
+inline constexpr const char* kParamFdj = "FDJ_Nm";
+inline constexpr const char* kParamFsj = "FSJ_Nm";
+inline constexpr const char* kParamEtaO = "eta_O";
+inline constexpr const char* kParamEtaA = "eta_A";
+
+struct ParameterEstimate {
+    std::string name;              ///< one of kParam*
+    std::optional<double> value;   ///< empty when not identifiable or not estimated
+    double std_error = 0;          ///< one standard error, same unit as value
+    bool identifiable = true;      ///< false: the data cannot tell this parameter (say why in note)
+    std::string method;            ///< "physics-wrls", "physics-breakaway", "network", "eq4", ...
+    std::string note;              ///< e.g. "not identifiable: |F_R| spread 0.0 N m"
+};
+
+struct HealthEstimate {
+    std::string estimator;  ///< "physics" or "network"
+    std::vector<ParameterEstimate> parameters;
+    /// Free-form diagnostics (condition number, slipping samples used, ...), name -> value.
+    std::vector<std::pair<std::string, double>> diagnostics;
+
+    [[nodiscard]] const ParameterEstimate* find(const std::string& name) const {
+        for (const auto& p : parameters) {
+            if (p.name == name) return &p;
+        }
+        return nullptr;
+    }
+};
+
+}  // namespace emadiag
