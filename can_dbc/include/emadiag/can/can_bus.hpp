@@ -1,0 +1,66 @@
+#pragma once
+// A CAN bus as the tool and the simulated EMA see it. Run-time failures (timeout, bus-off, a full
+// transmit queue) come back as [[nodiscard]] results; misuse and setup failures throw CanError.
+#include "emadiag/can/can_frame.hpp"
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace emadiag::can {
+
+enum class ReceiveStatus {
+    Frame,       ///< `frame` holds a data frame
+    Timeout,     ///< nothing arrived within the timeout
+    ErrorFrame,  ///< the controller reported an error frame (`frame` and `detail` say which)
+    BusOff,      ///< the controller went bus-off
+    EndOfLog,    ///< replay only: the log has no more frames
+};
+
+struct [[nodiscard]] ReceiveResult {
+    ReceiveStatus status = ReceiveStatus::Timeout;
+    CanFrame frame;
+    std::string detail;
+    [[nodiscard]] bool has_frame() const { return status == ReceiveStatus::Frame; }
+};
+
+enum class [[nodiscard]] SendStatus {
+    Sent,
+    QueueFull,  ///< the transmit queue stayed full for the whole send timeout
+    BusOff,     ///< the interface is down or bus-off
+    ReadOnly,   ///< a replayed log cannot transmit
+};
+
+[[nodiscard]] std::string to_string(SendStatus s);
+[[nodiscard]] std::string to_string(ReceiveStatus s);
+
+/// Acceptance filter: a frame passes when (frame id & mask) == (id & mask) and the id kinds match.
+struct CanFilter {
+    std::uint32_t id = 0;
+    std::uint32_t mask = 0;
+    bool extended = false;
+};
+
+class CanBus {
+public:
+    virtual ~CanBus() = default;
+    CanBus() = default;
+    CanBus(const CanBus&) = delete;
+    CanBus& operator=(const CanBus&) = delete;
+
+    virtual SendStatus send(const CanFrame& frame) = 0;
+    virtual ReceiveResult receive(std::chrono::microseconds timeout) = 0;
+    /// Replaces the acceptance filters; an empty list accepts every frame.
+    virtual void set_filters(const std::vector<CanFilter>& filters) = 0;
+    /// The spec the bus was opened with ("socketcan:vcan0", "candump:run.log").
+    [[nodiscard]] virtual const std::string& spec() const = 0;
+    /// Interface name written to candump logs ("vcan0").
+    [[nodiscard]] virtual const std::string& interface_name() const = 0;
+};
+
+/// Opens "socketcan:IFACE" or "candump:FILE.log" (replay). Throws CanError naming the spec.
+[[nodiscard]] std::unique_ptr<CanBus> open_bus(const std::string& spec);
+
+}  // namespace emadiag::can

@@ -1,0 +1,48 @@
+#pragma once
+// candump log files, as written by `candump -l` and read by `canplayer`:
+//   (1700000000.123456) vcan0 123#DEADBEEF        classic frame (3 hex digits: 11-bit id)
+//   (1700000000.123456) vcan0 12345678#00         29-bit id (8 hex digits)
+//   (1700000000.123456) vcan0 123##1DEADBEEF      CAN FD frame: flags nibble (1 = BRS, 2 = ESI), then data
+//   (1700000000.123456) vcan0 123#R               remote request
+// Error frames are written with CAN_ERR_FLAG (0x20000000) in the 8-digit id, as candump does.
+#include "emadiag/can/can_frame.hpp"
+
+#include <fstream>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace emadiag::can {
+
+inline constexpr std::uint32_t kCanErrFlag = 0x20000000u;
+
+struct CandumpRecord {
+    CanFrame frame;
+    std::string iface;
+};
+
+[[nodiscard]] std::string format_candump_line(const CanFrame& frame, const std::string& iface);
+/// Parses one line; on failure returns nullopt and puts the reason (with the column) in `error`.
+[[nodiscard]] std::optional<CandumpRecord> parse_candump_line(std::string_view line, std::string& error);
+/// Reads a whole log; throws CanError listing every bad line as "file:line:col: message".
+/// Empty lines are skipped.
+[[nodiscard]] std::vector<CandumpRecord> read_candump_file(const std::string& path);
+
+/// Appends frames to a candump log, one line each, flushed on flush() and on destruction.
+class CandumpWriter {
+public:
+    /// Creates or truncates `path`; throws CanError naming the path when it cannot be opened.
+    explicit CandumpWriter(const std::string& path);
+    void write(const CanFrame& frame, const std::string& iface);
+    void flush();
+    [[nodiscard]] const std::string& path() const { return path_; }
+    [[nodiscard]] std::size_t lines() const { return lines_; }
+
+private:
+    std::string path_;
+    std::ofstream out_;
+    std::size_t lines_ = 0;
+};
+
+}  // namespace emadiag::can

@@ -1,0 +1,731 @@
+// DBC parser: a tokenizer with line:col positions, then one function per keyword.
+// Every problem is collected as "file:line:col: message"; after an error the parser resumes at the
+// next keyword that starts a line, so one pass reports all problems.
+#include "emadiag/can/can_error.hpp"
+#include "emadiag/can/dbc.hpp"
+
+#include <cctype>
+#include <cerrno>
+#include <cstdlib>
+#include <set>
+
+namespace emadiag::can {
+namespace {
+
+enum class Tok { Ident, Number, String, Punct, End };
+
+struct Token {
+    Tok kind = Tok::End;
+    std::string text;
+    int line = 0;
+    int col = 0;
+    bool line_start = false;  ///< first token on its line
+};
+
+struct SyntaxError {
+    int line;
+    int col;
+    std::string message;
+};
+
+const std::set<std::string>& keywords() {
+    static const std::set<std::string> k = {
+        "VERSION", "NS_", "BS_", "BU_", "BO_", "SG_", "CM_", "BA_DEF_", "BA_DEF_DEF_", "BA_", "VAL_", "VAL_TABLE_",
+        "SIG_VALTYPE_", "SG_MUL_VAL_", "BO_TX_BU_", "EV_", "ENVVAR_DATA_", "SGTYPE_", "SGTYPE_VAL_", "BA_DEF_SGTYPE_",
+        "BA_SGTYPE_", "SIG_TYPE_REF_", "SIG_GROUP_", "SIGTYPE_VALTYPE_", "BA_DEF_REL_", "BA_REL_", "BA_DEF_DEF_REL_",
+        "CAT_DEF_", "CAT_", "FILTER", "BU_SG_REL_", "BU_EV_REL_", "BU_BO_REL_", "SG_MUL_VAL_", "VAL_TABLE_"};
+    return k;
+}
+/// Keywords accepted and skipped (they carry nothing this library uses).
+const std::set<std::string>& skipped_keywords() {
+    static const std::set<std::string> k = {"BO_TX_BU_", "EV_", "ENVVAR_DATA_", "SGTYPE_", "SGTYPE_VAL_",
+                                            "BA_DEF_SGTYPE_", "BA_SGTYPE_", "SIG_TYPE_REF_", "SIG_GROUP_",
+                                            "SIGTYPE_VALTYPE_", "BA_DEF_REL_", "BA_REL_", "BA_DEF_DEF_REL_",
+                                            "CAT_DEF_", "CAT_", "FILTER", "BU_SG_REL_", "BU_EV_REL_", "BU_BO_REL_"};
+    return k;
+}
+
+class Parser {
+public:
+    Parser(std::string_view text, std::string file) : text_(text), file_(std::move(file)) {}
+
+    Database run() {
+        tokenize();
+        while (peek().kind != Tok::End) {
+            const std::size_t start = pos_;
+            try {
+                statement();
+            } catch (const SyntaxError& e) {
+                error(e.line, e.col, e.message);
+                recover(start);
+            }
+        }
+        finish();
+        if (!errors_.empty()) {
+            std::string all = std::to_string(errors_.size()) + (errors_.size() == 1 ? " problem" : " problems") + " in " + file_ + ":";
+            for (const auto& e : errors_) all += "\n" + e;
+            throw CanError(all);
+        }
+        return std::move(db_);
+    }
+
+private:
+    // ---------------------------------------------------------------- tokenizer
+    void tokenize() {
+        int line = 1, col = 1;
+        bool at_line_start = true;
+        std::size_t i = 0;
+        auto advance = [&](std::size_t n) {
+            for (std::size_t k = 0; k < n; ++k, ++i) {
+                if (text_[i] == '\n') {
+                    ++line;
+                    col = 1;
+                    at_line_start = true;
+                } else {
+                    ++col;
+                }
+            }
+        };
+        while (i < text_.size()) {
+            const char c = text_[i];
+            if (c == '\n' || c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v') {
+                advance(1);
+                continue;
+            }
+            if (c == '/' && i + 1 < text_.size() && text_[i + 1] == '/') {  // line comment (accepted by cantools)
+                while (i < text_.size() && text_[i] != '\n') advance(1);
+                continue;
+            }
+            Token t;
+            t.line = line;
+            t.col = col;
+            t.line_start = at_line_start;
+            at_line_start = false;
+            if (std::isalpha(static_cast<unsigned char>(c)) || c == '_') {
+                std::size_t j = i;
+                while (j < text_.size() && (std::isalnum(static_cast<unsigned char>(text_[j])) || text_[j] == '_')) ++j;
+                t.kind = Tok::Ident;
+                t.text = std::string(text_.substr(i, j - i));
+                advance(j - i);
+            } else if (std::isdigit(static_cast<unsigned char>(c)) ||
+                       ((c == '-' || c == '+' || c == '.') && i + 1 < text_.size() &&
+                        (std::isdigit(static_cast<unsigned char>(text_[i + 1])) || text_[i + 1] == '.'))) {
+                std::size_t j = i + 1;
+                while (j < text_.size()) {
+                    const char d = text_[j];
+                    if (std::isalnum(static_cast<unsigned char>(d)) || d == '.' ||
+                        ((d == '-' || d == '+') && (text_[j - 1] == 'e' || text_[j - 1] == 'E') &&
+                         text_.substr(i, 2) != "0x")) {
+                        ++j;
+                    } else {
+                        break;
+                    }
+                }
+                t.kind = Tok::Number;
+                t.text = std::string(text_.substr(i, j - i));
+                advance(j - i);
+            } else if (c == '"') {
+                std::string s;
+                std::size_t j = i + 1;
+                bool closed = false;
+                while (j < text_.size()) {
+                    if (text_[j] == '\\' && j + 1 < text_.size()) {
+                        s += text_[j + 1];
+                        j += 2;
+                        continue;
+                    }
+                    if (text_[j] == '"') {
+                        closed = true;
+                        break;
+                    }
+                    s += text_[j++];
+                }
+                if (!closed) {
+                    error(t.line, t.col, "unterminated string");
+                    advance(text_.size() - i);
+                    break;
+                }
+                t.kind = Tok::String;
+                t.text = std::move(s);
+                advance(j + 1 - i);
+            } else if (std::string_view(":;|@()[],+-").find(c) != std::string_view::npos) {
+                t.kind = Tok::Punct;
+                t.text = std::string(1, c);
+                advance(1);
+            } else {
+                error(t.line, t.col, std::string("unexpected character '") + c + "'");
+                advance(1);
+                continue;
+            }
+            toks_.push_back(std::move(t));
+        }
+        Token end;
+        end.kind = Tok::End;
+        end.line = line;
+        end.col = col;
+        end.line_start = true;
+        toks_.push_back(end);
+    }
+
+    // ---------------------------------------------------------------- helpers
+    const Token& peek(std::size_t ahead = 0) const { return toks_[std::min(pos_ + ahead, toks_.size() - 1)]; }
+    const Token& next() {
+        const Token& t = toks_[pos_];
+        if (pos_ + 1 < toks_.size()) ++pos_;
+        return t;
+    }
+    static std::string describe(const Token& t) {
+        switch (t.kind) {
+            case Tok::End: return "end of file";
+            case Tok::String: return "string \"" + t.text + "\"";
+            default: return "'" + t.text + "'";
+        }
+    }
+    [[noreturn]] static void fail(const Token& t, const std::string& what) {
+        throw SyntaxError{t.line, t.col, "expected " + what + ", found " + describe(t)};
+    }
+    void error(int line, int col, const std::string& message) {
+        errors_.push_back(file_ + ":" + std::to_string(line) + ":" + std::to_string(col) + ": " + message);
+    }
+    void error(const Token& t, const std::string& message) { error(t.line, t.col, message); }
+
+    void expect_punct(const char* p) {
+        const Token& t = peek();
+        if (t.kind != Tok::Punct || t.text != p) fail(t, std::string("'") + p + "'");
+        next();
+    }
+    bool accept_punct(const char* p) {
+        if (peek().kind == Tok::Punct && peek().text == p) {
+            next();
+            return true;
+        }
+        return false;
+    }
+    std::string ident(const char* what) {
+        const Token& t = peek();
+        if (t.kind != Tok::Ident) fail(t, what);
+        return next().text;
+    }
+    std::string string_lit(const char* what) {
+        const Token& t = peek();
+        if (t.kind != Tok::String) fail(t, what);
+        return next().text;
+    }
+    double number(const char* what) {
+        const Token& t = peek();
+        if (t.kind != Tok::Number) fail(t, what);
+        errno = 0;
+        char* end = nullptr;
+        const double v = std::strtod(t.text.c_str(), &end);
+        if (end != t.text.c_str() + t.text.size() || errno == ERANGE)
+            throw SyntaxError{t.line, t.col, std::string("invalid number '") + t.text + "' for " + what};
+        next();
+        return v;
+    }
+    std::uint64_t unsigned_int(const char* what) {
+        const Token& t = peek();
+        if (t.kind != Tok::Number || t.text[0] == '-' || t.text[0] == '+') fail(t, std::string("unsigned integer ") + what);
+        errno = 0;
+        char* end = nullptr;
+        const unsigned long long v = std::strtoull(t.text.c_str(), &end, 10);
+        if (end != t.text.c_str() + t.text.size() || errno == ERANGE)
+            throw SyntaxError{t.line, t.col, std::string("invalid unsigned integer '") + t.text + "' for " + what};
+        next();
+        return v;
+    }
+    void expect_semicolon() { expect_punct(";"); }
+
+    /// Skips to the next keyword that starts a line (after an error in the statement at `start`).
+    void recover(std::size_t start) {
+        if (pos_ <= start) pos_ = start + 1;
+        while (peek().kind != Tok::End) {
+            const Token& t = peek();
+            if (t.line_start && t.kind == Tok::Ident && keywords().count(t.text)) return;
+            next();
+        }
+    }
+    /// Skips a statement that ends with ';'.
+    void skip_to_semicolon() {
+        while (peek().kind != Tok::End) {
+            if (next().text == ";" ) return;
+        }
+    }
+    /// Skips tokens until one that starts a line at column 1 (NS_ and BS_ blocks).
+    void skip_block() {
+        while (peek().kind != Tok::End && !(peek().line_start && peek().col == 1)) next();
+    }
+
+    // ---------------------------------------------------------------- statements
+    void statement() {
+        const Token& t = peek();
+        if (t.kind != Tok::Ident) fail(t, "a keyword");
+        const std::string kw = t.text;
+        if (kw == "VERSION") {
+            next();
+            db_.version = string_lit("version string");
+        } else if (kw == "NS_" || kw == "BS_") {
+            next();
+            expect_punct(":");
+            skip_block();
+        } else if (kw == "BU_") {
+            next();
+            expect_punct(":");
+            while (peek().kind == Tok::Ident && !(peek().line_start && keywords().count(peek().text)))
+                db_.nodes.push_back(next().text);
+        } else if (kw == "VAL_TABLE_") {
+            next();
+            const std::string name = ident("value table name");
+            auto& table = db_.value_tables[name];
+            while (peek().kind == Tok::Number) {
+                const auto v = static_cast<std::int64_t>(number("value"));
+                table[v] = string_lit("value description");
+            }
+            expect_semicolon();
+        } else if (kw == "BO_") {
+            message();
+        } else if (kw == "SG_") {
+            signal();
+        } else if (kw == "CM_") {
+            comment();
+        } else if (kw == "BA_DEF_") {
+            attribute_definition();
+        } else if (kw == "BA_DEF_DEF_") {
+            attribute_default();
+        } else if (kw == "BA_") {
+            attribute_value();
+        } else if (kw == "VAL_") {
+            value_descriptions();
+        } else if (kw == "SIG_VALTYPE_") {
+            signal_value_type();
+        } else if (kw == "SG_MUL_VAL_") {
+            extended_multiplexing();
+        } else if (skipped_keywords().count(kw)) {
+            next();
+            skip_to_semicolon();
+        } else {
+            throw SyntaxError{t.line, t.col, "unknown keyword '" + kw + "'"};
+        }
+    }
+
+    void message() {
+        const Token kw = next();
+        const Token id_tok = peek();
+        const std::uint64_t raw_id = unsigned_int("message id");
+        const std::string name = ident("message name");
+        expect_punct(":");
+        const Token dlc_tok = peek();
+        const std::uint64_t dlc = unsigned_int("message length");
+        const std::string transmitter = ident("transmitter node");
+        current_ = nullptr;
+        if (name == "VECTOR__INDEPENDENT_SIG_MSG") {  // CANdb++ pseudo-message for unattached signals
+            ignore_signals_ = true;
+            return;
+        }
+        ignore_signals_ = false;
+        Message m;
+        m.extended = (raw_id & kDbcExtendedFlag) != 0;
+        m.id = static_cast<std::uint32_t>(raw_id & ~std::uint64_t{kDbcExtendedFlag});
+        m.name = name;
+        m.transmitter = transmitter;
+        bool ok = true;
+        if (raw_id > 0xFFFFFFFFull || (m.extended && m.id > kExtendedIdMask) || (!m.extended && m.id > kStandardIdMask)) {
+            error(id_tok, "message '" + name + "': id " + std::to_string(raw_id) + " is out of range (standard ids up to 2047; extended ids need bit 31 set and at most 0x1FFFFFFF)");
+            ok = false;
+        }
+        if (dlc > kFdMaxLen || !is_valid_fd_len(dlc)) {
+            error(dlc_tok, "message '" + name + "': length " + std::to_string(dlc) + " bytes is not a CAN or CAN FD length (0-8, 12, 16, 20, 24, 32, 48, 64)");
+            ok = false;
+        }
+        m.length = static_cast<std::uint32_t>(dlc);
+        m.is_fd = dlc > kClassicMaxLen;
+        if (ok && db_.find_message(m.id, m.extended)) {
+            error(id_tok, "message '" + name + "': id " + format_id(m.id, m.extended) + " is already used by message '" + db_.find_message(m.id, m.extended)->name + "'");
+        }
+        (void)kw;
+        db_.messages.push_back(std::move(m));
+        current_ = &db_.messages.back();
+        current_ok_ = ok;
+    }
+
+    void signal() {
+        const Token kw = next();
+        Signal s;
+        const Token name_tok = peek();
+        s.name = ident("signal name");
+        if (peek().kind == Tok::Ident) {  // multiplexer indicator: M, mN, mNM
+            const Token mt = next();
+            const std::string& m = mt.text;
+            if (m == "M") {
+                s.mux_role = MuxRole::Multiplexor;
+            } else if (m.size() >= 2 && m[0] == 'm' && std::isdigit(static_cast<unsigned char>(m[1]))) {
+                std::size_t j = 1;
+                while (j < m.size() && std::isdigit(static_cast<unsigned char>(m[j]))) ++j;
+                s.mux_value = std::stoull(m.substr(1, j - 1));
+                const std::string rest = m.substr(j);
+                if (rest == "M") s.mux_role = MuxRole::MultiplexedMultiplexor;
+                else if (rest.empty()) s.mux_role = MuxRole::Multiplexed;
+                else throw SyntaxError{mt.line, mt.col, "invalid multiplexer indicator '" + m + "' (expected M, mN or mNM)"};
+                s.mux_ranges.push_back(MuxRange{s.mux_value, s.mux_value});
+            } else {
+                throw SyntaxError{mt.line, mt.col, "invalid multiplexer indicator '" + m + "' (expected M, mN or mNM)"};
+            }
+        }
+        expect_punct(":");
+        const Token start_tok = peek();
+        const std::uint64_t start = unsigned_int("start bit");
+        expect_punct("|");
+        const Token len_tok = peek();
+        const std::uint64_t len = unsigned_int("signal length");
+        expect_punct("@");
+        const Token order_tok = peek();
+        if (order_tok.kind != Tok::Number || (order_tok.text != "0" && order_tok.text != "1"))
+            fail(order_tok, "byte order 0 (big-endian) or 1 (little-endian)");
+        next();
+        s.byte_order = order_tok.text == "1" ? ByteOrder::LittleEndian : ByteOrder::BigEndian;
+        const Token sign_tok = peek();
+        if (sign_tok.kind != Tok::Punct || (sign_tok.text != "+" && sign_tok.text != "-")) fail(sign_tok, "'+' (unsigned) or '-' (signed)");
+        next();
+        s.is_signed = sign_tok.text == "-";
+        expect_punct("(");
+        s.factor = number("factor");
+        expect_punct(",");
+        s.offset = number("offset");
+        expect_punct(")");
+        expect_punct("[");
+        s.minimum = number("minimum");
+        expect_punct("|");
+        s.maximum = number("maximum");
+        expect_punct("]");
+        s.unit = string_lit("unit string");
+        while (peek().kind == Tok::Ident && !(peek().line_start && keywords().count(peek().text))) {
+            s.receivers.push_back(next().text);
+            accept_punct(",");
+        }
+        if (ignore_signals_) return;
+        if (current_ == nullptr) {
+            error(kw, "SG_ '" + s.name + "' outside a BO_ message");
+            return;
+        }
+        if (s.factor == 0.0) error(name_tok, "signal '" + s.name + "': factor must not be zero");
+        if (start >= kFdMaxLen * 8) {
+            error(start_tok, "signal '" + s.name + "': start bit " + std::to_string(start) + " is beyond 511");
+            return;
+        }
+        if (len == 0 || len > 64) {
+            error(len_tok, "signal '" + s.name + "': length " + std::to_string(len) + " bits; allowed 1 to 64");
+            return;
+        }
+        s.start_bit = static_cast<std::uint32_t>(start);
+        s.length = static_cast<std::uint32_t>(len);
+        if (current_->find_signal(s.name)) {
+            error(name_tok, "signal '" + s.name + "' is defined twice in message '" + current_->name + "'");
+            return;
+        }
+        if (current_ok_) {
+            if (auto e = s.compute_layout(current_->length)) error(start_tok, *e + " ('" + current_->name + "')");
+        }
+        current_->signals.push_back(std::move(s));
+        signal_pos_[current_->name + "." + current_->signals.back().name] = name_tok;
+    }
+
+    Message* message_by_id(const Token& at, std::uint64_t raw_id) {
+        const bool ext = (raw_id & kDbcExtendedFlag) != 0;
+        const auto id = static_cast<std::uint32_t>(raw_id & ~std::uint64_t{kDbcExtendedFlag});
+        for (auto& m : db_.messages)
+            if (m.id == id && m.extended == ext) return &m;
+        error(at, "unknown message id " + std::to_string(raw_id));
+        return nullptr;
+    }
+    Signal* signal_of(Message* m, const Token& at, const std::string& name) {
+        if (m == nullptr) return nullptr;
+        for (auto& s : m->signals)
+            if (s.name == name) return &s;
+        error(at, "message '" + m->name + "' has no signal '" + name + "'");
+        return nullptr;
+    }
+
+    void comment() {
+        next();
+        const Token& t = peek();
+        if (t.kind == Tok::String) {
+            db_.network_attributes["__comment"] = AttributeValue{true, 0, next().text};
+            expect_semicolon();
+            return;
+        }
+        const std::string what = ident("BU_, BO_, SG_, EV_ or a comment string");
+        if (what == "BU_") {
+            const std::string node = ident("node name");
+            db_.node_comments[node] = string_lit("comment string");
+        } else if (what == "BO_") {
+            const Token at = peek();
+            const auto id = unsigned_int("message id");
+            const std::string text = string_lit("comment string");
+            if (Message* m = message_by_id(at, id)) m->comment = text;
+        } else if (what == "SG_") {
+            const Token at = peek();
+            const auto id = unsigned_int("message id");
+            const Token sat = peek();
+            const std::string sname = ident("signal name");
+            const std::string text = string_lit("comment string");
+            if (Signal* s = signal_of(message_by_id(at, id), sat, sname)) s->comment = text;
+        } else if (what == "EV_") {
+            ident("environment variable name");
+            string_lit("comment string");
+        } else {
+            throw SyntaxError{t.line, t.col, "expected BU_, BO_, SG_ or EV_ after CM_, found '" + what + "'"};
+        }
+        expect_semicolon();
+    }
+
+    void attribute_definition() {
+        next();
+        AttributeDefinition d;
+        if (peek().kind == Tok::Ident) {
+            const Token ot = next();
+            if (ot.text == "BU_") d.object = AttributeObject::Node;
+            else if (ot.text == "BO_") d.object = AttributeObject::Message;
+            else if (ot.text == "SG_") d.object = AttributeObject::Signal;
+            else if (ot.text == "EV_") d.object = AttributeObject::EnvVar;
+            else throw SyntaxError{ot.line, ot.col, "expected BU_, BO_, SG_, EV_ or the attribute name, found '" + ot.text + "'"};
+        }
+        const Token name_tok = peek();
+        d.name = string_lit("attribute name");
+        const Token tt = peek();
+        const std::string type = ident("attribute type INT, HEX, FLOAT, STRING or ENUM");
+        if (type == "INT" || type == "HEX" || type == "FLOAT") {
+            d.type = type == "INT" ? AttributeType::Int : type == "HEX" ? AttributeType::Hex : AttributeType::Float;
+            d.minimum = number("attribute minimum");
+            d.maximum = number("attribute maximum");
+        } else if (type == "STRING") {
+            d.type = AttributeType::String;
+        } else if (type == "ENUM") {
+            d.type = AttributeType::Enum;
+            d.enum_values.push_back(string_lit("enum value"));
+            while (accept_punct(",")) d.enum_values.push_back(string_lit("enum value"));
+        } else {
+            throw SyntaxError{tt.line, tt.col, "attribute '" + d.name + "': unknown type '" + type + "' (expected INT, HEX, FLOAT, STRING or ENUM)"};
+        }
+        expect_semicolon();
+        if (db_.attribute_definitions.count(d.name)) error(name_tok, "attribute '" + d.name + "' is defined twice");
+        db_.attribute_definitions[d.name] = std::move(d);
+    }
+
+    /// Reads an attribute value token (number or string) and checks it against the definition.
+    AttributeValue attribute_literal(const AttributeDefinition* def, const Token& at) {
+        AttributeValue v;
+        if (peek().kind == Tok::String) {
+            v.is_string = true;
+            v.text = next().text;
+        } else {
+            v.number = number("attribute value");
+            v.text = at.text;
+        }
+        if (def == nullptr) return v;
+        const bool numeric = def->type == AttributeType::Int || def->type == AttributeType::Hex || def->type == AttributeType::Float;
+        if (numeric && v.is_string) {
+            error(at, "attribute '" + def->name + "' is numeric, found string \"" + v.text + "\"");
+        } else if (def->type == AttributeType::String && !v.is_string) {
+            error(at, "attribute '" + def->name + "' is a STRING, found number " + at.text);
+        } else if (numeric && (def->minimum != 0 || def->maximum != 0) && (v.number < def->minimum || v.number > def->maximum)) {
+            error(at, "attribute '" + def->name + "': value " + at.text + " outside [" + std::to_string(def->minimum) + ", " + std::to_string(def->maximum) + "]");
+        } else if (def->type == AttributeType::Enum) {
+            if (v.is_string) {
+                bool found = false;
+                for (std::size_t i = 0; i < def->enum_values.size(); ++i)
+                    if (def->enum_values[i] == v.text) {
+                        v.number = static_cast<double>(i);
+                        found = true;
+                    }
+                if (!found) error(at, "attribute '" + def->name + "': \"" + v.text + "\" is not one of its ENUM values");
+            } else if (v.number < 0 || v.number >= static_cast<double>(def->enum_values.size())) {
+                error(at, "attribute '" + def->name + "': ENUM index " + at.text + " outside 0.." + std::to_string(def->enum_values.size() - 1));
+            } else {
+                v.text = def->enum_values[static_cast<std::size_t>(v.number)];
+            }
+        }
+        return v;
+    }
+
+    void attribute_default() {
+        next();
+        const Token nt = peek();
+        const std::string name = string_lit("attribute name");
+        auto it = db_.attribute_definitions.find(name);
+        if (it == db_.attribute_definitions.end()) error(nt, "BA_DEF_DEF_ for undefined attribute '" + name + "'");
+        const Token vt = peek();
+        AttributeValue v = attribute_literal(it == db_.attribute_definitions.end() ? nullptr : &it->second, vt);
+        expect_semicolon();
+        if (it != db_.attribute_definitions.end()) it->second.default_value = v;
+    }
+
+    void attribute_value() {
+        next();
+        const Token nt = peek();
+        const std::string name = string_lit("attribute name");
+        auto it = db_.attribute_definitions.find(name);
+        const AttributeDefinition* def = it == db_.attribute_definitions.end() ? nullptr : &it->second;
+        if (def == nullptr) error(nt, "BA_ for undefined attribute '" + name + "'");
+        std::map<std::string, AttributeValue>* target = &db_.network_attributes;
+        AttributeObject object = AttributeObject::Network;
+        std::map<std::string, AttributeValue> discard;
+        if (peek().kind == Tok::Ident) {
+            const std::string what = next().text;
+            if (what == "BU_") {
+                object = AttributeObject::Node;
+                ident("node name");
+                target = &discard;
+            } else if (what == "BO_") {
+                object = AttributeObject::Message;
+                const Token at = peek();
+                Message* m = message_by_id(at, unsigned_int("message id"));
+                target = m ? &m->attributes : &discard;
+            } else if (what == "SG_") {
+                object = AttributeObject::Signal;
+                const Token at = peek();
+                Message* m = message_by_id(at, unsigned_int("message id"));
+                const Token sat = peek();
+                Signal* s = signal_of(m, sat, ident("signal name"));
+                target = s ? &s->attributes : &discard;
+            } else if (what == "EV_") {
+                object = AttributeObject::EnvVar;
+                ident("environment variable name");
+                target = &discard;
+            } else {
+                fail(nt, "BU_, BO_, SG_ or EV_");
+            }
+        }
+        if (def != nullptr && def->object != object) error(nt, "attribute '" + name + "' is not defined for this kind of object");
+        const Token vt = peek();
+        AttributeValue v = attribute_literal(def, vt);
+        expect_semicolon();
+        (*target)[name] = v;
+    }
+
+    void value_descriptions() {
+        next();
+        if (peek().kind == Tok::Ident) {  // VAL_ of an environment variable
+            skip_to_semicolon();
+            return;
+        }
+        const Token at = peek();
+        Message* m = message_by_id(at, unsigned_int("message id"));
+        const Token sat = peek();
+        const std::string sname = ident("signal name");
+        Signal* s = signal_of(m, sat, sname);
+        std::map<std::int64_t, std::string> table;
+        while (peek().kind == Tok::Number) {
+            const Token vt = peek();
+            const double v = number("value");
+            const std::string d = string_lit("value description");
+            if (table.count(static_cast<std::int64_t>(v))) error(vt, "signal '" + sname + "': value " + vt.text + " described twice");
+            table[static_cast<std::int64_t>(v)] = d;
+        }
+        expect_semicolon();
+        if (s) s->value_table = std::move(table);
+    }
+
+    void signal_value_type() {
+        next();
+        const Token at = peek();
+        Message* m = message_by_id(at, unsigned_int("message id"));
+        const Token sat = peek();
+        Signal* s = signal_of(m, sat, ident("signal name"));
+        accept_punct(":");
+        const Token vt = peek();
+        const std::uint64_t t = unsigned_int("value type");
+        expect_semicolon();
+        if (t > 2) {
+            error(vt, "SIG_VALTYPE_ " + vt.text + " is not 0 (integer), 1 (float32) or 2 (float64)");
+            return;
+        }
+        if (s == nullptr) return;
+        s->value_type = t == 1 ? ValueType::Float32 : t == 2 ? ValueType::Float64 : ValueType::Integer;
+        const std::uint32_t need = t == 1 ? 32 : t == 2 ? 64 : s->length;
+        if (s->length != need)
+            error(vt, "signal '" + s->name + "' is " + std::to_string(s->length) + " bits but SIG_VALTYPE_ " + vt.text + " needs " + std::to_string(need));
+    }
+
+    void extended_multiplexing() {
+        next();
+        const Token at = peek();
+        Message* m = message_by_id(at, unsigned_int("message id"));
+        const Token sat = peek();
+        Signal* s = signal_of(m, sat, ident("multiplexed signal name"));
+        const Token swt = peek();
+        const std::string sw = ident("multiplexor switch name");
+        std::vector<MuxRange> ranges;
+        do {
+            const std::uint64_t lo = unsigned_int("range start");
+            const Token ht = peek();
+            if (ht.kind != Tok::Number || ht.text[0] != '-') fail(ht, "'-' and the range end");
+            const std::uint64_t hi = std::stoull(ht.text.substr(1));
+            next();
+            if (hi < lo) error(ht, "multiplexor range " + std::to_string(lo) + "-" + std::to_string(hi) + " is empty");
+            ranges.push_back(MuxRange{lo, hi});
+        } while (accept_punct(","));
+        expect_semicolon();
+        if (s == nullptr) return;
+        if (m->find_signal(sw) == nullptr) {
+            error(swt, "message '" + m->name + "' has no multiplexor switch '" + sw + "'");
+            return;
+        }
+        s->multiplexor = sw;
+        if (!extended_mux_seen_.count(s)) s->mux_ranges.clear();
+        extended_mux_seen_.insert(s);
+        s->mux_ranges.insert(s->mux_ranges.end(), ranges.begin(), ranges.end());
+        if (s->mux_role == MuxRole::None) s->mux_role = MuxRole::Multiplexed;
+    }
+
+    // ---------------------------------------------------------------- final checks
+    void finish() {
+        const auto cycle_def = db_.attribute_definitions.find("GenMsgCycleTime");
+        const auto format_def = db_.attribute_definitions.find("VFrameFormat");
+        for (auto& m : db_.messages) {
+            // Simple multiplexing: mN signals without SG_MUL_VAL_ use the message's M switch.
+            const Signal* switch_sig = nullptr;
+            int switches = 0;
+            for (const auto& s : m.signals)
+                if (s.mux_role == MuxRole::Multiplexor) {
+                    switch_sig = &s;
+                    ++switches;
+                }
+            for (auto& s : m.signals) {
+                if ((s.mux_role == MuxRole::Multiplexed || s.mux_role == MuxRole::MultiplexedMultiplexor) && s.multiplexor.empty()) {
+                    const Token& at = signal_pos_[m.name + "." + s.name];
+                    if (switch_sig == nullptr) error(at, "signal '" + s.name + "' is multiplexed but message '" + m.name + "' has no multiplexor (M) signal");
+                    else if (switches > 1) error(at, "signal '" + s.name + "': message '" + m.name + "' has several multiplexors; SG_MUL_VAL_ must name the switch");
+                    else s.multiplexor = switch_sig->name;
+                }
+            }
+            if (auto it = m.attributes.find("GenMsgCycleTime"); it != m.attributes.end()) m.cycle_time_ms_ = it->second.number;
+            else if (cycle_def != db_.attribute_definitions.end() && cycle_def->second.default_value)
+                m.cycle_time_ms_ = cycle_def->second.default_value->number;
+            std::string format;
+            if (auto it = m.attributes.find("VFrameFormat"); it != m.attributes.end()) format = it->second.text;
+            else if (format_def != db_.attribute_definitions.end() && format_def->second.default_value)
+                format = format_def->second.default_value->text;
+            if (format.find("CANFD") != std::string::npos) m.is_fd = true;
+        }
+    }
+
+    std::string_view text_;
+    std::string file_;
+    std::vector<Token> toks_;
+    std::size_t pos_ = 0;
+    std::vector<std::string> errors_;
+    Database db_;
+    Message* current_ = nullptr;
+    bool current_ok_ = true;
+    bool ignore_signals_ = false;
+    std::map<std::string, Token> signal_pos_;
+    std::set<const Signal*> extended_mux_seen_;
+};
+
+}  // namespace
+
+Database parse_dbc(std::string_view text, const std::string& file_name) {
+    Database db = Parser(text, file_name).run();
+    return db;
+}
+
+}  // namespace emadiag::can
