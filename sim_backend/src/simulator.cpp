@@ -78,7 +78,9 @@ long steps_in(double period_s, double dt_s, const char* what) {
     return n;
 }
 
-Shared make_shared(const SimConfig& c) {
+}  // namespace
+
+Shared detail::make_shared(const SimConfig& c) {
     c.params.validate();
     const EmaParams& p = c.params;
     Shared s{};
@@ -92,6 +94,9 @@ Shared make_shared(const SimConfig& c) {
     s.w_max = p.w_max_rad_s;
     s.j = p.plant_inertia_kgm2();
     s.inv_j = 1.0 / s.j;
+    s.dt_over_l = s.dt / s.l;
+    s.dt_inv_j = s.dt * s.inv_j;
+    s.inv_tau = 1.0 / p.tau;
     s.tau = p.tau;
     s.k_theta = p.k_theta_per_s;
     s.k_w = p.k_w_a_s_per_rad;
@@ -111,67 +116,85 @@ Shared make_shared(const SimConfig& c) {
     return s;
 }
 
+namespace {
+
 template <int W>
 void load_lane(Lanes<W>& z, int l, const EmaParams& p) {
-    z.fdj[l] = p.fdj_nm;
-    z.fsj[l] = p.fsj_nm;
-    z.c_opp[l] = 1.0 / p.eta_o - 1.0;  // eq. (3), opposing
-    z.c_aid[l] = 1.0 - p.eta_a;        // eq. (3), aiding
+    detail::lane(z.fdj, l) = p.fdj_nm;
+    detail::lane(z.fsj, l) = p.fsj_nm;
+    detail::lane(z.c_opp, l) = 1.0 / p.eta_o - 1.0;  // eq. (3), opposing
+    detail::lane(z.c_aid, l) = 1.0 - p.eta_a;        // eq. (3), aiding
 }
 
-/// Runs W lanes from rest to the end; fills out[0..W).
-template <int W, bool kFull>
-void run_lanes(const Shared& s, Lanes<W>& z, SimResult* out[W], bool record_truth) {
-    for (int l = 0; l < W; ++l) {
+/// Runs G interleaved groups of W lanes from rest to the end; lane l of group g fills out[g * W + l].
+/// Interleaving independent groups hides the latency of the step's dependency chain.
+template <int W, int G, bool kFull>
+void run_lanes(const Shared& s, Lanes<W>* z, SimResult* out[W * G], bool record_truth) {
+    for (int l = 0; l < W * G; ++l) {
         out[l]->samples.resize(static_cast<std::size_t>(s.total_samples));
         if (record_truth) out[l]->truth.resize(static_cast<std::size_t>(s.total_samples));
     }
     const long aircraft_per_sample = s.steps_per_sample / s.steps_per_aircraft;
     const double inv_steps = 1.0 / static_cast<double>(s.steps_per_sample);
     const bool case_b = s.load_case == LoadCase::B;
+    using D = typename detail::Vec<W>::D;
     long n = 0;
     for (long k = 0; k < s.total_samples; ++k) {
-        for (int l = 0; l < W; ++l) {
-            z.sum_i[l] = z.sum_w[l] = z.sum_h[l] = z.sum_tf[l] = z.sum_tm[l] = z.sum_fr[l] = z.stuck_count[l] = 0.0;
+        for (int g = 0; g < G; ++g) {
+            z[g].sum_i = z[g].sum_w = z[g].sum_h = z[g].sum_tf = z[g].sum_tm = z[g].sum_fr = z[g].stuck_count = D{};
         }
         for (long a = 0; a < aircraft_per_sample; ++a) {
-            for (long j = 0; j < s.steps_per_aircraft; ++j) detail::step<W, kFull>(s, z, ++n);
-            if (case_b) detail::aircraft_update<W, kFull>(s, z);
+            for (long j = 0; j < s.steps_per_aircraft; ++j) {
+                ++n;
+                for (int g = 0; g < G; ++g) detail::step<W, kFull>(s, z[g], n);
+            }
+            if (case_b) {
+                for (int g = 0; g < G; ++g) detail::aircraft_update<W, kFull>(s, z[g]);
+            }
         }
         const double t = static_cast<double>(n) * s.dt;
         const double cmd = command_deg(s.sequence, t);
-        for (int l = 0; l < W; ++l) {
-            Sample& smp = out[l]->samples[static_cast<std::size_t>(k)];
-            smp.t_s = t;
-            smp.current_a = z.sum_i[l] * inv_steps;
-            smp.speed_rad_s = z.sum_w[l] * inv_steps;
-            smp.theta_m_rad = z.th[l];
-            smp.hinge_moment_nm = z.sum_h[l] * inv_steps;
-            smp.command_deg = cmd;
-            if (!std::isfinite(smp.current_a) || !std::isfinite(smp.speed_rad_s) || !std::isfinite(smp.theta_m_rad) ||
-                !std::isfinite(smp.hinge_moment_nm)) {
-                out[l]->finite = false;
-            }
-            if (record_truth) {
-                SampleTruth& tr = out[l]->truth[static_cast<std::size_t>(k)];
-                tr.friction_torque_nm = z.sum_tf[l] * inv_steps;
-                tr.motor_torque_nm = z.sum_tm[l] * inv_steps;
-                tr.load_torque_nm = z.sum_fr[l] * inv_steps;
-                tr.stuck_all_period = z.stuck_count[l] == static_cast<double>(s.steps_per_sample);
+        for (int g = 0; g < G; ++g) {
+            Lanes<W>& zg = z[g];
+            for (int l = 0; l < W; ++l) {
+                SimResult& r = *out[g * W + l];
+                Sample& smp = r.samples[static_cast<std::size_t>(k)];
+                smp.t_s = t;
+                smp.current_a = detail::lane(zg.sum_i, l) * inv_steps;
+                smp.speed_rad_s = detail::lane(zg.sum_w, l) * inv_steps;
+                smp.theta_m_rad = detail::lane(zg.th, l);
+                smp.hinge_moment_nm = detail::lane(zg.sum_h, l) * inv_steps;
+                smp.command_deg = cmd;
+                if (!std::isfinite(smp.current_a) || !std::isfinite(smp.speed_rad_s) ||
+                    !std::isfinite(smp.theta_m_rad) || !std::isfinite(smp.hinge_moment_nm)) {
+                    r.finite = false;
+                }
+                if (record_truth) {
+                    SampleTruth& tr = r.truth[static_cast<std::size_t>(k)];
+                    tr.friction_torque_nm = detail::lane(zg.sum_tf, l) * inv_steps;
+                    tr.motor_torque_nm = detail::lane(zg.sum_tm, l) * inv_steps;
+                    tr.load_torque_nm = detail::lane(zg.sum_fr, l) * inv_steps;
+                    tr.stuck_all_period = detail::lane(zg.stuck_count, l) == static_cast<double>(s.steps_per_sample);
+                }
             }
         }
     }
     if constexpr (kFull) {
-        for (int l = 0; l < W; ++l) {
-            EnergyAccount& e = out[l]->energy;
-            e.electrical_in_j = z.e_in[l];
-            e.copper_loss_j = z.e_cu[l];
-            e.friction_work_j = z.e_fr[l];
-            e.load_work_j = z.e_load[l];
-            e.saturation_loss_j = z.e_sat[l];
-            e.stop_loss_j = z.e_stop[l];
-            e.stored_start_j = 0.0;
-            e.stored_end_j = 0.5 * s.l * z.i[l] * z.i[l] + 0.5 * s.j * z.w[l] * z.w[l];
+        for (int g = 0; g < G; ++g) {
+            Lanes<W>& zg = z[g];
+            for (int l = 0; l < W; ++l) {
+                EnergyAccount& e = out[g * W + l]->energy;
+                e.electrical_in_j = detail::lane(zg.e_in, l);
+                e.copper_loss_j = detail::lane(zg.e_cu, l);
+                e.friction_work_j = detail::lane(zg.e_fr, l);
+                e.load_work_j = detail::lane(zg.e_load, l);
+                e.saturation_loss_j = detail::lane(zg.e_sat, l);
+                e.stop_loss_j = detail::lane(zg.e_stop, l);
+                e.stored_start_j = 0.0;
+                const double i = detail::lane(zg.i, l);
+                const double w = detail::lane(zg.w, l);
+                e.stored_end_j = 0.5 * s.l * i * i + 0.5 * s.j * w * w;
+            }
         }
     }
 }
@@ -187,24 +210,23 @@ void apply_sensor_effects(std::vector<Sample>& samples, const Effects& fx) {
 
 bool needs_full(const SimConfig& c) { return c.record_truth || c.params.effects.any(); }
 
-template <int W>
-void run_group(const SimConfig* configs[W], SimResult* out[W]) {
-    const Shared s = make_shared(*configs[0]);
-    auto z = std::make_unique<Lanes<W>>();
-    *z = Lanes<W>{};
-    for (int l = 0; l < W; ++l) load_lane(*z, l, configs[l]->params);
+template <int W, int G>
+void run_group(const SimConfig* configs[W * G], SimResult* out[W * G]) {
+    const Shared s = detail::make_shared(*configs[0]);
+    auto z = std::make_unique<Lanes<W>[]>(G);
+    for (int l = 0; l < W * G; ++l) load_lane(z[l / W], l % W, configs[l]->params);
     bool full = false;
     bool truth = false;
-    for (int l = 0; l < W; ++l) {
+    for (int l = 0; l < W * G; ++l) {
         full = full || needs_full(*configs[l]);
         truth = truth || configs[l]->record_truth;
     }
     if (full) {
-        run_lanes<W, true>(s, *z, out, truth);
+        run_lanes<W, G, true>(s, z.get(), out, truth);
     } else {
-        run_lanes<W, false>(s, *z, out, false);
+        run_lanes<W, G, false>(s, z.get(), out, false);
     }
-    for (int l = 0; l < W; ++l) {
+    for (int l = 0; l < W * G; ++l) {
         if (!configs[l]->record_truth) {
             out[l]->truth.clear();
             out[l]->energy = EnergyAccount{};
@@ -238,7 +260,7 @@ SimResult simulate(const SimConfig& config) {
     SimResult result;
     const SimConfig* cfg[1] = {&config};
     SimResult* out[1] = {&result};
-    run_group<1>(cfg, out);
+    run_group<1, 1>(cfg, out);
     return result;
 }
 
@@ -254,7 +276,7 @@ std::vector<SimResult> simulate_batch(const std::vector<SimConfig>& configs, uns
     }
     configs[0].params.validate();
     for (const auto& c : configs) c.params.validate();
-    constexpr int W = kBatchLanes;
+    constexpr int W = kBatchLanes * kBatchGroups;
     const std::size_t groups = (configs.size() + W - 1) / W;
     std::atomic<std::size_t> next{0};
     auto worker = [&] {
@@ -272,7 +294,7 @@ std::vector<SimResult> simulate_batch(const std::vector<SimConfig>& configs, uns
                     out[l] = &pad[static_cast<std::size_t>(l)];
                 }
             }
-            run_group<W>(cfg, out);
+            run_group<kBatchLanes, kBatchGroups>(cfg, out);
         }
     };
     const unsigned n_threads = std::max(1u, std::min<unsigned>(threads, static_cast<unsigned>(groups)));

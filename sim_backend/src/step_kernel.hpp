@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <type_traits>
 
 namespace emadiag::sim::detail {
 
@@ -41,6 +42,7 @@ inline double rad2deg(double r) { return r * (180.0 / std::numbers::pi); }
 
 /// Parameters shared by every lane of a batch.
 struct Shared {
+    double dt_over_l, inv_tau, dt_inv_j;  // precomputed: multiplications replace divisions in the hot loop
     double dt, v_dc, r, l, k_t, i_max, t_max, w_max, inv_j, j, tau, k_theta, k_w, stop_m;
     LoadCase load_case;
     Sequence sequence;
@@ -48,21 +50,8 @@ struct Shared {
     long steps_per_sample, steps_per_aircraft, total_samples, brk_first_hold_steps, brk_mid_hold_steps;
 };
 
-template <int W>
-struct Lanes {
-    // health parameters per lane
-    double fdj[W], fsj[W], c_opp[W], c_aid[W];
-    // state
-    double i[W], w[W], th[W], x[4][W];
-    double gap[W];  // backlash: motor angle minus load angle, within +/- backlash/2
-    // BRK sequencer
-    double phase[W], ramp_i[W], ramp_start_th[W], last_iref[W], hold_end_n[W];
-    // period accumulators
-    double sum_i[W], sum_w[W], sum_h[W], sum_tf[W], sum_tm[W], sum_fr[W], stuck_count[W];
-    // energy accounts (kFull)
-    double e_in[W], e_cu[W], e_fr[W], e_load[W], e_sat[W], e_stop[W];
-    bool bad[W];
-};
+/// Validates the config and precomputes what every lane shares.
+[[nodiscard]] Shared make_shared(const SimConfig& c);
 
 /// Surface-angle command in degrees (section 5).
 inline double command_deg_inline(Sequence seq, double t) {
@@ -83,150 +72,220 @@ inline double command_deg_inline(Sequence seq, double t) {
     return 0.0;
 }
 
-inline double sgn(double v) { return static_cast<double>((v > 0.0) - (v < 0.0)); }
+/// W doubles in one GCC vector, and its mask type. W = 1 is plain double and bool: the scalar path.
+template <int W>
+struct Vec {
+    typedef double D __attribute__((vector_size(W * sizeof(double))));
+    typedef long long M __attribute__((vector_size(W * sizeof(long long))));
+};
+template <>
+struct Vec<1> {
+    using D = double;
+    using M = bool;
+};
+
+template <int W>
+struct Lanes {
+    using D = typename Vec<W>::D;
+    // health parameters per lane
+    D fdj, fsj, c_opp, c_aid;
+    // state
+    D i, w, th, x[4];
+    D gap;  // backlash: motor angle minus load angle, within +/- backlash/2
+    // BRK sequencer
+    D phase, ramp_i, ramp_start_th, last_iref, hold_end_n;
+    // period accumulators
+    D sum_i, sum_w, sum_h, sum_tf, sum_tm, sum_fr, stuck_count;
+    // energy accounts (kFull)
+    D e_in, e_cu, e_fr, e_load, e_sat, e_stop;
+};
+
+template <class D, class M>
+inline D sel(M m, D a, D b) { return m ? a : b; }
+template <class M>
+inline M vnot(M m) {
+    if constexpr (std::is_same_v<M, bool>) {
+        return !m;
+    } else {
+        return ~m;
+    }
+}
+template <class M>
+inline M mask_of(bool b) { return b ? vnot(M{}) : M{}; }
+/// Lane l of a vector, or the scalar itself.
+template <class D>
+inline double& lane(D& v, int l) {
+    if constexpr (std::is_same_v<D, double>) {
+        (void)l;
+        return v;
+    } else {
+        return v[l];
+    }
+}
+template <class D>
+inline D vabs(D a) { return a < 0.0 ? -a : a; }
+template <class D>
+inline D vclamp(D a, double lo, double hi) {
+    a = a < lo ? D{} + lo : a;
+    return a > hi ? D{} + hi : a;
+}
+template <class D>
+inline D vsgn(D a) {
+    const D one = D{} + 1.0;
+    return sel(a > 0.0, one, sel(a < 0.0, -one, D{}));
+}
 
 template <int W, bool kFull>
-inline void step(const Shared& s, Lanes<W>& z, long n) {
-    const double t = static_cast<double>(n) * s.dt;  // section 7: step n runs at t = n dt
+inline void step(const Shared& shared, Lanes<W>& z, long n) {
+    using D = typename Vec<W>::D;
+    using M = typename Vec<W>::M;
+    const Shared& s = shared;
+    const double dt = s.dt;
+    const double t = static_cast<double>(n) * dt;  // section 7: step n runs at t = n dt
+    const D zero{};
+    const D one = zero + 1.0;
+
+    // BRK: entering a ramp at the start of this step (sections 5 and 7).
+    D phase = z.phase;
+    M ramping = M{};
+    D ramp_rate = zero;
+    if (s.sequence == Sequence::Brk) {
+        const double dn = static_cast<double>(n);
+        const M start_up = (phase == kPhaseHold0) & mask_of<M>(dn > static_cast<double>(s.brk_first_hold_steps));
+        const M start_down = (phase == kPhaseHold1) & (z.hold_end_n < dn);
+        const M start_ramp = start_up | start_down;
+        phase = sel(start_up, zero + kPhaseRampUp, sel(start_down, zero + kPhaseRampDown, phase));
+        z.ramp_i = sel(start_ramp, z.last_iref, z.ramp_i);
+        z.ramp_start_th = sel(start_ramp, z.th, z.ramp_start_th);
+        ramping = (phase == kPhaseRampUp) | (phase == kPhaseRampDown);
+        ramp_rate = sel(phase == kPhaseRampUp, zero + kBrkRampAPerS * dt, zero - kBrkRampAPerS * dt);
+    }
+
     // 1. Command (shared by all lanes).
     const double cmd_m = s.tau * deg2rad(command_deg_inline(s.sequence, t));
-    double h_shared = kCaseAHingeNm;
-    if (s.load_case == LoadCase::AExt) h_shared = kCaseAHingeNm + kAExtHingeRateNmPerS * t;
-    const bool case_b = s.load_case == LoadCase::B;
-    const bool brk = s.sequence == Sequence::Brk;
-    const double brk_start_n = static_cast<double>(s.brk_first_hold_steps);
-    const double dn = static_cast<double>(n);
+    // 2. Controller.
+    const D w_ref = vclamp(s.k_theta * (cmd_m - z.th), -s.w_max, s.w_max);
+    const D i_pos = vclamp(s.k_w * (w_ref - z.w), -s.i_max, s.i_max);
+    D i_ref = i_pos;
+    if (s.sequence == Sequence::Brk) {
+        i_ref = sel(ramping, vclamp(z.ramp_i, -s.i_max, s.i_max), i_pos);
+        z.ramp_i = sel(ramping, z.ramp_i + ramp_rate, z.ramp_i);
+        z.last_iref = i_ref;
+    }
 
-#pragma GCC ivdep
-    for (int l = 0; l < W; ++l) {
-        // BRK: entering a ramp at the start of this step (section 5 and 7).
-        double phase = z.phase[l];
-        const bool start_up = brk && phase == kPhaseHold0 && dn > brk_start_n;
-        const bool start_down = brk && phase == kPhaseHold1 && dn > z.hold_end_n[l];
-        const bool start_ramp = start_up || start_down;
-        phase = start_up ? kPhaseRampUp : (start_down ? kPhaseRampDown : phase);
-        z.ramp_i[l] = start_ramp ? z.last_iref[l] : z.ramp_i[l];
-        z.ramp_start_th[l] = start_ramp ? z.th[l] : z.ramp_start_th[l];
-        const bool ramping = phase == kPhaseRampUp || phase == kPhaseRampDown;
+    // 3. Motor: bang-bang voltage, R-L with BEMF (paper section 2.2).
+    const D i0 = z.i;
+    const D w0 = z.w;
+    const D v = s.v_dc * vsgn(i_ref - i0);
+    const D i1 = i0 + s.dt_over_l * (v - s.k_t * w0 - s.r * i0);
+    z.i = i1;
+    D t_m = vclamp(s.k_t * i1, -s.t_max, s.t_max);
 
-        // 2. Controller.
-        const double w_ref = std::clamp(s.k_theta * (cmd_m - z.th[l]), -s.w_max, s.w_max);
-        const double i_pos = std::clamp(s.k_w * (w_ref - z.w[l]), -s.i_max, s.i_max);
-        const double i_ramp = std::clamp(z.ramp_i[l], -s.i_max, s.i_max);
-        const double i_ref = ramping ? i_ramp : i_pos;
-        const double ramp_rate = phase == kPhaseRampUp ? kBrkRampAPerS : -kBrkRampAPerS;
-        z.ramp_i[l] = ramping ? z.ramp_i[l] + ramp_rate * s.dt : z.ramp_i[l];
-        z.last_iref[l] = i_ref;
+    // 4. Load (section 4). Case B: hinge moment from the trim deviations, theta_m at step start.
+    D th_load = z.th;
+    if constexpr (kFull) th_load = th_load - z.gap;
+    D h;
+    if (s.load_case == LoadCase::B) {
+        const D alpha_t = z.x[1] + z.x[3] * (kTailArmM / kAirspeedMS);
+        const D delta_rad = th_load * s.inv_tau;
+        h = -(kQbarPa * kSeM2 * kCeM * (kChAlphaPerRad * alpha_t + kChDeltaPerRad * delta_rad));
+    } else if (s.load_case == LoadCase::AExt) {
+        h = zero + (kCaseAHingeNm + kAExtHingeRateNmPerS * t);
+    } else {
+        h = zero + kCaseAHingeNm;
+    }
+    D f_r = h * s.inv_tau;
 
-        // 3. Motor: bang-bang voltage, R-L with BEMF (paper section 2.2).
-        const double i0 = z.i[l];
-        const double w0 = z.w[l];
-        const double v = s.v_dc * sgn(i_ref - i0);
-        const double i1 = i0 + s.dt * (v - s.k_t * w0 - s.r * i0) / s.l;
-        z.i[l] = i1;
-        double t_m = std::clamp(s.k_t * i1, -s.t_max, s.t_max);
-
-        // 4. Load (section 4). Case B: hinge moment from the trim deviations, theta_m at step start.
-        double h = h_shared;
-        double th_load = z.th[l];
-        if constexpr (kFull) th_load -= z.gap[l];
-        if (case_b) {
-            const double alpha_t = z.x[1][l] + z.x[3][l] * kTailArmM / kAirspeedMS;
-            const double delta_rad = th_load / s.tau;
-            h = -(kQbarPa * kSeM2 * kCeM * (kChAlphaPerRad * alpha_t + kChDeltaPerRad * delta_rad));
-        }
-        double f_r = h / s.tau;
-
-        // 5. Friction: Borello (paper eqs. 2, 3, 5).
-        double extra_dyn = 0.0, extra_stat = 0.0, viscous = 0.0;
-        bool in_gap = false;
-        if constexpr (kFull) {
-            t_m += s.fx.ripple_amplitude_nm * std::sin(s.fx.ripple_periods_per_rev * z.th[l]);
+    // 5. Friction: Borello (paper eqs. 2, 3, 5).
+    D extra_dyn = zero, extra_stat = zero, viscous = zero;
+    M in_gap = M{};
+    if constexpr (kFull) {
+        D w0c = w0;
+        for (int l = 0; l < W; ++l) {
+            lane(t_m, l) += s.fx.ripple_amplitude_nm * std::sin(s.fx.ripple_periods_per_rev * lane(z.th, l));
             const double spall = s.fx.spall_amplitude_nm == 0.0 ? 0.0
                 : s.fx.spall_amplitude_nm *
-                      std::exp(-0.5 * std::pow((rad2deg(th_load / s.tau) - s.fx.spall_center_deg) /
+                      std::exp(-0.5 * std::pow((rad2deg(lane(th_load, l) * s.inv_tau) - s.fx.spall_center_deg) /
                                                    s.fx.spall_width_deg, 2));
-            const double wr = w0 / s.fx.stribeck_speed_rad_s;
-            extra_dyn = spall + s.fx.stribeck_amplitude_nm * std::exp(-wr * wr);
-            extra_stat = spall;
-            viscous = s.fx.viscous_nm_s_rad * w0;
-            // Backlash: inside the free play the load and the transmission friction are not felt.
-            in_gap = s.fx.backlash_rad > 0.0 && std::abs(z.gap[l]) < 0.5 * s.fx.backlash_rad;
-            f_r = in_gap ? 0.0 : f_r;
+            const double wr = lane(w0c, l) / s.fx.stribeck_speed_rad_s;
+            lane(extra_dyn, l) = spall + s.fx.stribeck_amplitude_nm * std::exp(-wr * wr);
+            lane(extra_stat, l) = spall;
         }
-        const double t_act = t_m - f_r;
-        const bool moving = w0 != 0.0;
-        const double d = moving ? sgn(w0) : (t_act > 0.0 ? 1.0 : -1.0);
-        const double c = (f_r * d > 0.0) ? z.c_opp[l] : z.c_aid[l];
-        const double abs_fr = std::abs(f_r);
-        double dyn = z.fdj[l] + c * abs_fr + extra_dyn;
-        double stat = z.fsj[l] + c * abs_fr + extra_stat;
-        if constexpr (kFull) {
-            dyn = in_gap ? 0.0 : dyn;
-            stat = in_gap ? 0.0 : stat;
-        }
-        const bool stuck = !moving && std::abs(t_act) <= stat;
-        const double t_f = stuck ? t_act : d * dyn + viscous;
-        double w1 = stuck ? 0.0 : w0 + s.dt * (t_act - t_f) * s.inv_j;
-        const bool reversal_stop = moving && (w1 * w0 < 0.0);
-        w1 = reversal_stop ? 0.0 : w1;
-
-        // 6. Position and end stops.
-        double th1 = z.th[l] + s.dt * w1;
-        const bool at_stop = th1 > s.stop_m || th1 < -s.stop_m;
-        th1 = std::clamp(th1, -s.stop_m, s.stop_m);
-        const double w_before_stop = w1;
-        w1 = at_stop ? 0.0 : w1;
-        if constexpr (kFull) {
-            const double half = 0.5 * s.fx.backlash_rad;
-            z.gap[l] = std::clamp(z.gap[l] + (th1 - z.th[l]), -half, half);
-            const double i_avg = 0.5 * (i0 + i1);
-            z.e_in[l] += v * i_avg * s.dt;
-            z.e_cu[l] += s.r * i0 * i_avg * s.dt;
-            const double w_avg = 0.5 * (w0 + w1);
-            z.e_fr[l] += t_f * w_avg * s.dt;
-            z.e_load[l] += f_r * w_avg * s.dt;
-            z.e_sat[l] += (s.k_t * i1 - t_m) * w_avg * s.dt;
-            // Kinetic energy removed by the zeroing of speed (reversal stop and end stop).
-            const double w_unclipped = reversal_stop ? w0 + s.dt * (t_act - t_f) * s.inv_j : w_before_stop;
-            z.e_stop[l] += (reversal_stop || at_stop) ? 0.5 * s.j * (w_unclipped * w_unclipped - w1 * w1) : 0.0;
-            z.sum_tf[l] += t_f;
-            z.sum_tm[l] += t_m;
-            z.sum_fr[l] += f_r;
-            z.stuck_count[l] += stuck ? 1.0 : 0.0;
-        }
-        z.th[l] = th1;
-        z.w[l] = w1;
-
-        // BRK: end of a ramp after the position update; the next hold starts on the next step.
-        const bool moved = ramping && std::abs(th1 - z.ramp_start_th[l]) >= kBrkMoveRad;
-        const double next_phase = phase == kPhaseRampUp ? kPhaseHold1 : kPhaseHold2;
-        z.hold_end_n[l] = (moved && phase == kPhaseRampUp) ? dn + static_cast<double>(s.brk_mid_hold_steps)
-                                                          : z.hold_end_n[l];
-        z.phase[l] = moved ? next_phase : phase;
-
-        // Period means (section 7): I after step 3, w after step 6, the H used in step 4.
-        z.sum_i[l] += i1;
-        z.sum_w[l] += w1;
-        z.sum_h[l] += h;
+        viscous = s.fx.viscous_nm_s_rad * w0;
+        // Backlash: inside the free play the load and the transmission friction are not felt.
+        if (s.fx.backlash_rad > 0.0) in_gap = vabs(z.gap) < 0.5 * s.fx.backlash_rad;
+        f_r = sel(in_gap, zero, f_r);
     }
+    const D t_act = t_m - f_r;
+    const M moving = w0 != 0.0;
+    const D d = sel(moving, vsgn(w0), sel(t_act > 0.0, one, -one));
+    const D c = sel(f_r * d > 0.0, z.c_opp, z.c_aid);
+    const D abs_fr = vabs(f_r);
+    D dyn = z.fdj + c * abs_fr + extra_dyn;
+    D stat = z.fsj + c * abs_fr + extra_stat;
+    if constexpr (kFull) {
+        dyn = sel(in_gap, zero, dyn);
+        stat = sel(in_gap, zero, stat);
+    }
+    const M stuck = vnot(moving) & (vabs(t_act) <= stat);
+    const D t_f = sel(stuck, t_act, d * dyn + viscous);
+    const D w_free = w0 + (t_act - t_f) * s.dt_inv_j;
+    const M reversal_stop = moving & (w_free * w0 < 0.0);
+    D w1 = sel(stuck | reversal_stop, zero, w_free);
+
+    // 6. Position and end stops.
+    D th1 = z.th + dt * w1;
+    const M at_stop = (th1 > s.stop_m) | (th1 < -s.stop_m);
+    th1 = vclamp(th1, -s.stop_m, s.stop_m);
+    const D w_before_stop = w1;
+    w1 = sel(at_stop, zero, w1);
+    if constexpr (kFull) {
+        const double half = 0.5 * s.fx.backlash_rad;
+        z.gap = vclamp(z.gap + (th1 - z.th), -half, half);
+        const D i_avg = 0.5 * (i0 + i1);
+        z.e_in += v * i_avg * dt;
+        z.e_cu += s.r * i0 * i_avg * dt;
+        const D w_avg = 0.5 * (w0 + w1);
+        z.e_fr += t_f * w_avg * dt;
+        z.e_load += f_r * w_avg * dt;
+        z.e_sat += (s.k_t * i1 - t_m) * w_avg * dt;
+        // Kinetic energy removed by zeroing the speed (reversal stop and end stop).
+        const D w_unclipped = sel(reversal_stop, w_free, w_before_stop);
+        z.e_stop += sel(reversal_stop | at_stop, 0.5 * s.j * (w_unclipped * w_unclipped - w1 * w1), zero);
+        z.sum_tf += t_f;
+        z.sum_tm += t_m;
+        z.sum_fr += f_r;
+        z.stuck_count += sel(stuck, one, zero);
+    }
+    z.th = th1;
+    z.w = w1;
+
+    // BRK: end of a ramp after the position update; the next hold starts on the next step.
+    if (s.sequence == Sequence::Brk) {
+        const M moved = ramping & (vabs(th1 - z.ramp_start_th) >= kBrkMoveRad);
+        const M up = phase == kPhaseRampUp;
+        z.hold_end_n = sel(moved & up, zero + (static_cast<double>(n) + static_cast<double>(s.brk_mid_hold_steps)),
+                           z.hold_end_n);
+        z.phase = sel(moved, sel(up, zero + kPhaseHold1, zero + kPhaseHold2), phase);
+    }
+
+    // Period means (section 7): I after step 3, w after step 6, the H used in step 4.
+    z.sum_i += i1;
+    z.sum_w += w1;
+    z.sum_h += h;
 }
 
 /// Case B aircraft update every 1e-4 s (section 3 step 7), forward Euler, delta_e in degrees.
 template <int W, bool kFull>
 inline void aircraft_update(const Shared& s, Lanes<W>& z) {
-#pragma GCC ivdep
-    for (int l = 0; l < W; ++l) {
-        double th_load = z.th[l];
-        if constexpr (kFull) th_load -= z.gap[l];
-        const double de = rad2deg(th_load / s.tau);
-        double dx[4];
-        for (int r = 0; r < 4; ++r) {
-            dx[r] = kA[r][0] * z.x[0][l] + kA[r][1] * z.x[1][l] + kA[r][2] * z.x[2][l] + kA[r][3] * z.x[3][l];
-        }
-        dx[3] += kB3 * de;
-        for (int r = 0; r < 4; ++r) z.x[r][l] += kAircraftPeriodS * dx[r];
-    }
+    using D = typename Vec<W>::D;
+    D th_load = z.th;
+    if constexpr (kFull) th_load = th_load - z.gap;
+    const D de = th_load * s.inv_tau * (180.0 / std::numbers::pi);
+    D dx[4];
+    for (int r = 0; r < 4; ++r) dx[r] = kA[r][0] * z.x[0] + kA[r][1] * z.x[1] + kA[r][2] * z.x[2] + kA[r][3] * z.x[3];
+    dx[3] += kB3 * de;
+    for (int r = 0; r < 4; ++r) z.x[r] += kAircraftPeriodS * dx[r];
 }
 
 }  // namespace emadiag::sim::detail

@@ -96,10 +96,12 @@ struct SimResult {
 [[nodiscard]] SimResult simulate(const SimConfig& config);
 
 /// Many simulations that differ only in FDJ, FSJ, eta_O, eta_A, noise seed (and noise profile),
-/// run on the batched SIMD path (structure of arrays, kBatchLanes lanes) over `threads` threads.
+/// run on the batched SIMD path (structure of arrays, kBatchLanes lanes x kBatchGroups) over `threads` threads.
 /// All other fields of the configs must be equal; throws SimError naming the first that is not.
 [[nodiscard]] std::vector<SimResult> simulate_batch(const std::vector<SimConfig>& configs, unsigned threads = 1);
 inline constexpr int kBatchLanes = 8;
+/// Independent lane groups stepped together to hide the step's latency (kBatchLanes * kBatchGroups per batch).
+inline constexpr int kBatchGroups = 2;
 
 /// Adds the noise profile to samples in place (seeded; Gaussian on top of std::mt19937_64),
 /// then quantises to the sensor resolutions. NoiseProfile::None leaves the samples untouched.
