@@ -1,0 +1,161 @@
+// GCC 12 reports false -Wmaybe-uninitialized inside Eigen's AVX-512 GEMM kernels (gemm_pack_lhs).
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include "estimation/network_model.hpp"
+
+#include "core/emadiag_error.hpp"
+#include "estimation/dataset.hpp"
+#include "emadiag/sim/ema_params.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace emadiag {
+namespace {
+
+constexpr const char* kFormatName = "emadiag-network";
+constexpr double kEq4DerivativeStep = 1e-6;
+
+std::string lower(std::string s) {
+    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return s;
+}
+
+}  // namespace
+
+nlohmann::json NetworkModel::to_json() const {
+    return {{"format", kFormatName},
+            {"version", kNetworkModelVersion},
+            {"spec", spec.to_json()},
+            {"input_normalisation", input_norm.to_json()},
+            {"output_normalisation",
+             [this] {
+                 nlohmann::json o = nlohmann::json::array();
+                 for (const auto& name : spec.outputs) {
+                     const HealthRange r = health_range(name);
+                     o.push_back({{"name", name}, {"lo", r.lo}, {"hi", r.hi}});
+                 }
+                 return o;
+             }()},
+            {"std_error_normalised", std_error_normalised},
+            {"network", network.to_json()},
+            {"training", training}};
+}
+
+NetworkModel NetworkModel::from_json(const nlohmann::json& j, const std::string& where) {
+    NetworkModel m;
+    try {
+        if (j.at("format").get<std::string>() != kFormatName) {
+            throw EmadiagError(where + ": field format is " + j.at("format").dump() + ", expected \"" + kFormatName + "\"");
+        }
+        const int version = j.at("version").get<int>();
+        if (version != kNetworkModelVersion) {
+            throw EmadiagError(where + ": field version " + std::to_string(version) + " is not supported (expected " +
+                               std::to_string(kNetworkModelVersion) + ")");
+        }
+        m.spec = NetworkSpec::from_json(j.at("spec"), where + ".spec");
+        m.input_norm = InputNormalisation::from_json(j.at("input_normalisation"), where + ".input_normalisation");
+        m.network = Network::from_json(j.at("network"), where + ".network");
+        m.std_error_normalised = j.at("std_error_normalised").get<std::vector<double>>();
+        if (j.contains("training")) m.training = j.at("training");
+        for (const auto& o : j.at("output_normalisation")) {
+            const std::string name = o.at("name").get<std::string>();
+            const HealthRange r = health_range(name);
+            if (o.at("lo").get<double>() != r.lo || o.at("hi").get<double>() != r.hi) {
+                throw EmadiagError(where + ".output_normalisation: range of " + name + " differs from section 8 [" +
+                                   std::to_string(r.lo) + ", " + std::to_string(r.hi) + "]");
+            }
+        }
+    } catch (const nlohmann::json::exception& e) {
+        throw EmadiagError(where + ": " + e.what());
+    }
+    const auto outputs = static_cast<std::size_t>(m.network.outputs());
+    if (m.network.inputs() != m.spec.input_count() || outputs != m.spec.outputs.size() ||
+        m.input_norm.min.size() != m.spec.input_count() || m.std_error_normalised.size() != outputs ||
+        m.network.hidden() != m.spec.hidden_neurons) {
+        throw EmadiagError(where + ": sizes disagree: spec inputs " + std::to_string(m.spec.input_count()) +
+                           ", network inputs " + std::to_string(m.network.inputs()) + ", normalisation " +
+                           std::to_string(m.input_norm.min.size()) + ", outputs " + std::to_string(outputs) +
+                           ", std errors " + std::to_string(m.std_error_normalised.size()));
+    }
+    return m;
+}
+
+NetworkModel NetworkModel::load(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw EmadiagError("cannot open network model " + path);
+    nlohmann::json j;
+    try {
+        in >> j;
+    } catch (const nlohmann::json::exception& e) {
+        throw EmadiagError(path + ": not valid JSON: " + e.what());
+    }
+    return from_json(j, path);
+}
+
+void NetworkModel::save(const std::string& path) const {
+    std::ofstream out(path);
+    if (!out) throw EmadiagError("cannot open " + path + " for writing");
+    out << to_json().dump() << '\n';
+    if (!out) throw EmadiagError("write error on " + path);
+}
+
+std::vector<double> NetworkModel::predict_normalised(const Run& run) const {
+    if (lower(run.load_case) != lower(spec.load_case) || lower(run.sequence) != lower(spec.sequence)) {
+        throw EmadiagError("the network model was trained on case " + spec.load_case + ", sequence " + spec.sequence +
+                           "; the run is case " + run.load_case + ", sequence " + run.sequence);
+    }
+    const Eigen::VectorXd x = network_features(run, spec);
+    for (Eigen::Index i = 0; i < x.size(); ++i) {
+        if (!std::isfinite(x(i))) throw EmadiagError("network input " + std::to_string(i) + " is not finite");
+    }
+    const Eigen::MatrixXd y = network.forward(input_norm.apply(x));
+    std::vector<double> u(static_cast<std::size_t>(y.rows()));
+    for (Eigen::Index o = 0; o < y.rows(); ++o) u[static_cast<std::size_t>(o)] = from_internal(y(o, 0));
+    return u;
+}
+
+HealthEstimate NetworkModel::estimate(const Run& run) const {
+    const std::vector<double> u = predict_normalised(run);
+    HealthEstimate h;
+    h.estimator = "network";
+    const auto predicted = [&](const std::string& name) -> std::optional<std::size_t> {
+        for (std::size_t o = 0; o < spec.outputs.size(); ++o) {
+            if (spec.outputs[o] == name) return o;
+        }
+        return std::nullopt;
+    };
+    const std::string why = "not identifiable: the network (case " + spec.load_case + ") does not predict it";
+    for (const char* name : {kParamFdj, kParamFsj, kParamEtaO, kParamEtaA}) {
+        ParameterEstimate p;
+        p.name = name;
+        p.method = "network";
+        if (const auto o = predicted(name)) {
+            const HealthRange r = health_range(name);
+            p.value = r.denormalise(u[*o]);
+            p.std_error = std_error_normalised[*o] * (r.hi - r.lo);
+        } else if (std::string(name) == kParamEtaA && predicted(kParamEtaO)) {
+            const std::size_t eo = *predicted(kParamEtaO);
+            const HealthRange r = health_range(kParamEtaO);
+            const double eta_o = r.denormalise(u[eo]);
+            const double tau = run.constants.tau;
+            p.value = sim::eta_a_from_eta_o(eta_o, tau);  // eq. (4)
+            const double slope = (sim::eta_a_from_eta_o(eta_o + kEq4DerivativeStep, tau) -
+                                  sim::eta_a_from_eta_o(eta_o - kEq4DerivativeStep, tau)) /
+                                 (2 * kEq4DerivativeStep);
+            p.std_error = std::abs(slope) * std_error_normalised[eo] * (r.hi - r.lo);
+            p.method = "eq4";
+            p.note = "from the network's eta_O by eq. (4)";
+        } else {
+            p.identifiable = false;
+            p.note = why;
+        }
+        h.parameters.push_back(std::move(p));
+    }
+    h.diagnostics.emplace_back("timesteps", spec.timesteps);
+    h.diagnostics.emplace_back("hidden_neurons", spec.hidden_neurons);
+    return h;
+}
+
+}  // namespace emadiag
