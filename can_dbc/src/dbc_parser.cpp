@@ -4,6 +4,7 @@
 #include "emadiag/can/can_error.hpp"
 #include "emadiag/can/dbc.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <cstdlib>
@@ -63,7 +64,10 @@ public:
         finish();
         if (!errors_.empty()) {
             std::string all = std::to_string(errors_.size()) + (errors_.size() == 1 ? " problem" : " problems") + " in " + file_ + ":";
-            for (const auto& e : errors_) all += "\n" + e;
+            std::stable_sort(errors_.begin(), errors_.end(), [](const Problem& a, const Problem& b) {
+                return a.line != b.line ? a.line < b.line : a.col < b.col;
+            });
+            for (const auto& e : errors_) all += "\n" + e.text;
             throw CanError(all);
         }
         return std::move(db_);
@@ -185,7 +189,7 @@ private:
         throw SyntaxError{t.line, t.col, "expected " + what + ", found " + describe(t)};
     }
     void error(int line, int col, const std::string& message) {
-        errors_.push_back(file_ + ":" + std::to_string(line) + ":" + std::to_string(col) + ": " + message);
+        errors_.push_back(Problem{line, col, file_ + ":" + std::to_string(line) + ":" + std::to_string(col) + ": " + message});
     }
     void error(const Token& t, const std::string& message) { error(t.line, t.col, message); }
 
@@ -712,7 +716,12 @@ private:
     std::string file_;
     std::vector<Token> toks_;
     std::size_t pos_ = 0;
-    std::vector<std::string> errors_;
+    struct Problem {
+        int line;
+        int col;
+        std::string text;
+    };
+    std::vector<Problem> errors_;
     Database db_;
     Message* current_ = nullptr;
     bool current_ok_ = true;
