@@ -1,0 +1,215 @@
+// emadiag estimate RUN.csv|RUN.log [--model FILE] [--json]: health parameters of one run, by the
+// physics estimator (always) and the paper's network (with --model, or a shipped model in
+// models/ for the run's case and sequence). Text for people; --json is the stable schema of
+// docs/estimate-json.md.
+#include "cli/command.hpp"
+#include "core/emadiag_error.hpp"
+#include "core/run_csv.hpp"
+#include "estimation/health_estimate.hpp"
+#include "estimation/physics_estimator.hpp"
+#include "estimation/run_checks.hpp"
+
+#if __has_include("estimation/network_model.hpp")
+#include "estimation/network_model.hpp"
+#define EMADIAG_HAVE_NETWORK 1
+#endif
+#if __has_include("can_tool/candump_run.hpp")
+#include "can_tool/candump_run.hpp"
+#define EMADIAG_HAVE_CANDUMP 1
+#endif
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+namespace emadiag::cli {
+namespace {
+
+/// Version of the --json schema (docs/estimate-json.md).
+constexpr int kEstimateJsonVersion = 1;
+constexpr double kNinetyFiveQuantile = 1.96;
+
+bool ends_with(const std::string& s, const std::string& suffix) {
+    return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+Run read_run_any(const std::string& path) {
+    if (ends_with(path, ".log")) {
+#ifdef EMADIAG_HAVE_CANDUMP
+        return read_run_candump(path);
+#else
+        throw EmadiagError(path + ": candump (.log) runs need the CAN run reader (can_tool/candump_run.hpp), "
+                                  "which this build does not have; convert the run to CSV");
+#endif
+    }
+    if (!ends_with(path, ".csv")) {
+        throw EmadiagError(path + ": unknown run format; expected RUN.csv (run CSV) or RUN.log (candump)");
+    }
+    return read_run_csv_file(path);
+}
+
+/// Where shipped models are looked for: $EMADIAG_MODELS_DIR, ./models, <exe>/../models, <exe>/../../models.
+std::vector<std::filesystem::path> model_dirs() {
+    std::vector<std::filesystem::path> dirs;
+    if (const char* env = std::getenv("EMADIAG_MODELS_DIR")) dirs.emplace_back(env);
+    dirs.emplace_back("models");
+    std::error_code ec;
+    const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+    if (!ec) {
+        dirs.push_back(exe.parent_path().parent_path() / "models");
+        dirs.push_back(exe.parent_path().parent_path().parent_path() / "models");
+    }
+    return dirs;
+}
+
+struct Outcome {
+    std::vector<HealthEstimate> estimates;
+    std::vector<std::string> model_files;
+    std::vector<std::string> notes;
+};
+
+#ifdef EMADIAG_HAVE_NETWORK
+/// A shipped model for the run's case and sequence, if any.
+std::optional<std::string> shipped_model_for(const Run& run, std::vector<std::string>& notes) {
+    for (const auto& dir : model_dirs()) {
+        std::error_code ec;
+        if (!std::filesystem::is_directory(dir, ec)) continue;
+        std::vector<std::filesystem::path> files;
+        for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+            if (entry.path().extension() == ".json") files.push_back(entry.path());
+        }
+        std::sort(files.begin(), files.end());
+        for (const auto& f : files) {
+            try {
+                const NetworkModel m = NetworkModel::load(f.string());
+                if (m.spec.load_case == run.load_case && m.spec.sequence == run.sequence) return f.string();
+            } catch (const std::exception& e) {
+                notes.push_back("skipped " + f.string() + ": " + e.what());
+            }
+        }
+        return std::nullopt;  // the first models/ directory found is the one that counts
+    }
+    return std::nullopt;
+}
+#endif
+
+std::string fmt(double v, int digits) {
+    std::ostringstream os;
+    os << std::setprecision(digits) << v;
+    return os.str();
+}
+
+void print_text(std::ostream& os, const std::string& path, const Run& run, const Outcome& out) {
+    os << "run " << path << ": case " << run.load_case << ", sequence " << run.sequence << ", "
+       << run.samples.size() << " samples\n";
+    for (const auto& h : out.estimates) {
+        os << "\nestimator: " << h.estimator << '\n';
+        for (const auto& p : h.parameters) {
+            os << "  " << std::left << std::setw(7) << p.name << ' ';
+            if (p.value) {
+                const double lo = *p.value - kNinetyFiveQuantile * p.std_error;
+                const double hi = *p.value + kNinetyFiveQuantile * p.std_error;
+                os << std::setw(11) << fmt(*p.value, 6) << " +/- " << std::setw(10) << fmt(p.std_error, 3)
+                   << " (1 se; 95 % [" << fmt(lo, 6) << ", " << fmt(hi, 6) << "])  [" << p.method << "]";
+            } else {
+                os << std::setw(11) << (p.identifiable ? "not estimated" : "not identifiable") << "  [" << p.method
+                   << "]";
+            }
+            if (!p.note.empty()) os << "  " << p.note;
+            os << '\n';
+        }
+        if (!h.diagnostics.empty()) {
+            os << "  diagnostics:";
+            for (const auto& [k, v] : h.diagnostics) os << ' ' << k << '=' << fmt(v, 6);
+            os << '\n';
+        }
+    }
+    for (const auto& f : out.model_files) os << "model: " << f << '\n';
+    for (const auto& n : out.notes) os << "note: " << n << '\n';
+    // Agreement between the methods, parameter by parameter.
+    if (out.estimates.size() == 2) {
+        os << "\nagreement (|difference| / combined se):\n";
+        for (const auto& p : out.estimates[0].parameters) {
+            const auto* q = out.estimates[1].find(p.name);
+            if (!q || !p.value || !q->value) continue;
+            const double se = std::hypot(p.std_error, q->std_error);
+            const double z = se > 0 ? std::abs(*p.value - *q->value) / se : 0.0;
+            os << "  " << std::left << std::setw(7) << p.name << ' ' << fmt(z, 3)
+               << (z <= kNinetyFiveQuantile ? "  agree" : "  DISAGREE") << '\n';
+        }
+    }
+}
+
+nlohmann::json to_json(const std::string& path, const Run& run, const Outcome& out) {
+    nlohmann::json j;
+    j["schema"] = "emadiag-estimate";
+    j["version"] = kEstimateJsonVersion;
+    j["run"] = {{"path", path}, {"case", run.load_case}, {"sequence", run.sequence}, {"samples", run.samples.size()}};
+    j["estimates"] = nlohmann::json::array();
+    for (const auto& h : out.estimates) {
+        nlohmann::json e;
+        e["estimator"] = h.estimator;
+        e["parameters"] = nlohmann::json::array();
+        for (const auto& p : h.parameters) {
+            nlohmann::json q;
+            q["name"] = p.name;
+            q["value"] = p.value ? nlohmann::json(*p.value) : nlohmann::json(nullptr);
+            q["std_error"] = p.value ? nlohmann::json(p.std_error) : nlohmann::json(nullptr);
+            q["ci95"] = p.value ? nlohmann::json::array({*p.value - kNinetyFiveQuantile * p.std_error,
+                                                         *p.value + kNinetyFiveQuantile * p.std_error})
+                                : nlohmann::json(nullptr);
+            q["identifiable"] = p.identifiable;
+            q["method"] = p.method;
+            q["note"] = p.note;
+            e["parameters"].push_back(q);
+        }
+        e["diagnostics"] = nlohmann::json::object();
+        for (const auto& [k, v] : h.diagnostics) e["diagnostics"][k] = std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+        j["estimates"].push_back(e);
+    }
+    j["models"] = out.model_files;
+    j["notes"] = out.notes;
+    return j;
+}
+
+const bool registered = register_command(Command{
+    "estimate", "Estimate FDJ, FSJ, eta_O and eta_A of a run (physics estimator, and the network if a model applies)",
+    [](CLI::App& sub) -> std::function<int()> {
+        auto path = std::make_shared<std::string>();
+        auto model = std::make_shared<std::string>();
+        auto json = std::make_shared<bool>(false);
+        sub.add_option("run", *path, "Run file: RUN.csv (run CSV) or RUN.log (candump)")->required();
+        sub.add_option("--model", *model, "Network model JSON (default: a shipped model in models/ for the run's case)");
+        sub.add_flag("--json", *json, "Print the stable JSON schema of docs/estimate-json.md");
+        return [path, model, json] {
+            const Run run = read_run_any(*path);
+            check_run(run);
+            Outcome out;
+            out.estimates.push_back(estimate_physics(run));
+#ifdef EMADIAG_HAVE_NETWORK
+            std::optional<std::string> mfile;
+            if (!model->empty()) mfile = *model; else mfile = shipped_model_for(run, out.notes);
+            if (mfile) {
+                const NetworkModel m = NetworkModel::load(*mfile);
+                out.estimates.push_back(m.estimate(run));
+                out.model_files.push_back(*mfile);
+            } else {
+                out.notes.push_back("no network model for case " + run.load_case + ", sequence " + run.sequence +
+                                    " (give --model FILE); physics estimator only");
+            }
+#else
+            if (!model->empty()) throw EmadiagError("--model: this build has no network estimator");
+#endif
+            if (*json) std::cout << to_json(*path, run, out).dump(2) << '\n';
+            else print_text(std::cout, *path, run, out);
+            return 0;
+        };
+    }});
+
+}  // namespace
+}  // namespace emadiag::cli

@@ -1,0 +1,87 @@
+#pragma once
+// The breakaway events of a BRK run (ema-reference.md section 5): FSJ made observable.
+//
+// In direction d the shaft breaks away when d (k_t I - F_R) = FSJ + c(d) |F_R|, with I the
+// INSTANTANEOUS current. The bang-bang current loop chatters around the ramp demand I_ref: after
+// each up-step of u = (V_dc - R |I|) dt / L (0.108 A) the current peaks above I_ref, and the
+// peaks sweep the band (I_ref, I_ref + u] every u L / (R |I| dt) steps, during which I_ref rises
+// by r = ramp_rate u L / (R |I|). So the shaft breaks away when I_ref + u - r/2 (+/- r/2, uniform)
+// reaches the threshold, while the SAMPLE-MEAN current still tracks I_ref (section 5 note).
+//
+// Steps, per direction:
+//  1. Noise levels from the first 50 ms position hold (stuck: the speed is exactly zero on clean
+//     data, which selects the exact method below).
+//  2. The breakaway time t_b:
+//     - clean data: the first sample with d w > 0 brackets t_b to one period; inside it, t_b is
+//       the best fit of the slip trajectory below (or the middle of the period if that fails);
+//     - noisy data: a profile least-squares fit of the slip trajectory, between the ramp start
+//       and the ramp end (the current jump when the position hold takes over): for t > t_b,
+//       J dw/dt = g0 + g1 (t - t_b), g1 known from the ramp rate and the load slope, g0 and the
+//       start angle free; speeds are period means, angles end-of-period values.
+//  3. I_ref(t) = I_start + d ramp_rate (t - t_start): I_start is the hold demand from the
+//     controller law (theta measured, w = 0), t_start the sequence's ramp start (the second ramp:
+//     100 ms after the exact move end on clean data). On noisy data the second ramp instead fits
+//     I_ref to the sample-mean currents, corrected for the chatter mean (a logarithmic mean: the
+//     2-cycle centre decays towards zero at R c / L between jumps of u).
+//  4. F_R at t_b from a local linear fit of the hinge moment.
+//  5. Threshold S_d = d (k_t (I_ref(t_b) + d u_eff) - F_R) = FSJ + c(d)|F_R|, with a standard
+//     error from t_b, b, the chatter sweep and F_R.
+//  6. Also the dynamic friction D_d = FDJ + c(d)|F_R| from the telescoped mean T_R over the fully
+//     slipping samples between breakaway and ramp end, when there are at least kMinSlipSamples.
+#include "core/run.hpp"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace emadiag {
+
+/// Section 5, the BRK sequence.
+inline constexpr double kBrkFirstHoldS = 0.05;
+inline constexpr double kBrkHoldS = 0.1;
+inline constexpr double kBrkRampAPerS = 10.0;
+inline constexpr double kBrkMoveRad = 0.01;
+/// Section 1, the drive, for the chatter step of the section-5 note.
+inline constexpr double kDriveSupplyV = 270.0;
+inline constexpr double kStatorResistanceOhm = 1.0;
+inline constexpr double kStatorInductanceH = 2.5e-3;
+inline constexpr double kCurrentLoopStepS = 1e-6;
+/// Section 1, the controller: I_ref = K_w (K_theta (theta_cmd_m - theta_m) - w).
+inline constexpr double kPositionLoopGainPerS = 30.0;
+inline constexpr double kSpeedLoopGainAsPerRad = 0.25;
+/// A drop of the current below the ramp line by this much marks the ramp end (hold takes over).
+inline constexpr double kRampEndDropA = 0.15;
+/// Fewest fully slipping samples for a dynamic-friction value from a breakaway slip.
+inline constexpr std::size_t kMinSlipSamples = 3;
+/// How far back before the ramp end the trajectory fit looks.
+inline constexpr double kTrajectoryWindowS = 0.04;
+
+struct BreakawayEvent {
+    int direction = 0;                  ///< +1 (first ramp) or -1 (second ramp)
+    std::string method;                 ///< "exact-speed" (clean data) or "trajectory-fit"
+    std::size_t ramp_first = 0;         ///< first sample fully inside the ramp
+    std::size_t breakaway_sample = 0;   ///< sample whose period holds t_b
+    std::size_t ramp_end_sample = 0;    ///< sample whose period holds the ramp end
+    double t_breakaway_s = 0, t_breakaway_se_s = 0;
+    double ramp_current_a = 0, ramp_current_se_a = 0;  ///< I_ref(t_b)
+    double chatter_offset_a = 0, chatter_se_a = 0;     ///< u - r/2 and r/sqrt(12)
+    double load_torque_nm = 0, load_torque_se_nm = 0;  ///< F_R at t_b (signed)
+    double threshold_nm = 0, threshold_se_nm = 0;      ///< S_d = FSJ + c(d)|F_R|
+    double slip_accel_torque_nm = 0;                   ///< fitted g0 (J dw/dt just after t_b)
+    std::optional<double> dynamic_friction_nm;         ///< D_d = FDJ + c(d)|F_R|
+    double dynamic_friction_se_nm = 0;
+    std::size_t slip_samples = 0;
+};
+
+struct BreakawayAnalysis {
+    bool clean = false;  ///< speeds exactly zero while stuck: noise-free data
+    double sigma_speed_rad_s = 0, sigma_theta_rad = 0, sigma_current_a = 0, sigma_hinge_nm = 0;
+    std::vector<BreakawayEvent> events;  ///< up to two, in time order
+    std::vector<std::string> problems;   ///< why an event was not found
+};
+
+/// Finds and measures the breakaway events of a BRK run. Throws EmadiagError when the run is too
+/// short to hold the first position hold.
+[[nodiscard]] BreakawayAnalysis analyse_breakaways(const Run& run);
+
+}  // namespace emadiag

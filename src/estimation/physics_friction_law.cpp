@@ -1,0 +1,44 @@
+#include "estimation/physics_friction_law.hpp"
+
+#include "emadiag/sim/ema_params.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace emadiag {
+namespace {
+constexpr double kNinetyFiveQuantile = 1.959963984540054;
+constexpr double kCoveredFraction = 0.95;
+}  // namespace
+
+double load_coefficient_opposing(double eta_o) { return 1.0 / eta_o - 1.0; }  // eq. (5), opposing
+
+double load_coefficient_aiding(double eta_o, double tau) {
+    return 1.0 - sim::eta_a_from_eta_o(eta_o, tau);  // eq. (5), aiding, with eq. (4)
+}
+
+double eta_a_derivative(double eta_o, double tau) {
+    // eq. (4): eta_A = (2 tau^2 eta_O - tau^2 + tau) / (tau^2 eta_O + tau - eta_O + 1) = N / D
+    const double t2 = tau * tau;
+    const double num = 2 * t2 * eta_o - t2 + tau;
+    const double den = t2 * eta_o + tau - eta_o + 1;
+    return (2 * t2 * den - num * (t2 - 1)) / (den * den);
+}
+
+LoadCoefficientPrior load_coefficient_prior(double tau) {
+    LoadCoefficientPrior p;
+    const double eta_a_mid = 0.5 * (kPriorEtaAMin + kPriorEtaAMax);
+    p.eta_o_mid = sim::eta_o_from_eta_a(eta_a_mid, tau);
+    p.c_opp_mid = load_coefficient_opposing(p.eta_o_mid);
+    p.c_aid_mid = load_coefficient_aiding(p.eta_o_mid, tau);
+    const double eo_lo = sim::eta_o_from_eta_a(kPriorEtaAMin, tau);
+    const double eo_hi = sim::eta_o_from_eta_a(kPriorEtaAMax, tau);
+    const double opp_half = 0.5 * std::abs(load_coefficient_opposing(eo_lo) - load_coefficient_opposing(eo_hi));
+    const double aid_half = 0.5 * (kPriorEtaAMax - kPriorEtaAMin);
+    p.c_half_width = std::max(opp_half, aid_half);
+    return p;
+}
+
+double uniform_equivalent_se(double half_width) { return kCoveredFraction * half_width / kNinetyFiveQuantile; }
+
+}  // namespace emadiag

@@ -1,0 +1,38 @@
+#pragma once
+// The Borello friction law of the paper as the estimators see it (eqs. 2, 3, 5 and 4):
+//   slipping in direction d:  d T_R = FDJ + c(d) |F_R|,  c = 1/eta_O - 1 (opposing, F_R d > 0)
+//                                                      c = 1 - eta_A   (aiding)
+//   breakaway in direction d: d (k_t I - F_R) = FSJ + c(d) |F_R|
+// and eta_A from eta_O by eq. (4). Also the prior of section 8 (the +/-20 % ranges) used when the
+// data cannot tell eta from FDJ.
+namespace emadiag {
+
+/// Section 8: eta_A is uniform in [0.659031, 0.988546]; eta_O follows from eq. (4).
+inline constexpr double kPriorEtaAMin = 0.659031;
+inline constexpr double kPriorEtaAMax = 0.988546;
+/// Section 8 ranges of FDJ and FSJ (N m), used only for normalised errors and sanity limits.
+inline constexpr double kPriorFdjMinNm = 0.064, kPriorFdjMaxNm = 0.096;
+inline constexpr double kPriorFsjMinNm = 0.096, kPriorFsjMaxNm = 0.144;
+
+/// Load coefficient c of eq. (5) for an opposing load: 1/eta_O - 1.
+[[nodiscard]] double load_coefficient_opposing(double eta_o);
+/// Load coefficient for an aiding load: 1 - eta_A, eta_A from eq. (4) with tau.
+[[nodiscard]] double load_coefficient_aiding(double eta_o, double tau);
+/// d eta_A / d eta_O of eq. (4) (analytic).
+[[nodiscard]] double eta_a_derivative(double eta_o, double tau);
+
+/// What the section-8 prior says about c when eta is not identifiable: the mean of c over the
+/// eta_A range, and the half-width of its (nearly uniform) spread.
+struct LoadCoefficientPrior {
+    double eta_o_mid = 0;         ///< eta_O at the middle of the eta_A range
+    double c_opp_mid = 0;         ///< c for opposing load at eta_o_mid
+    double c_aid_mid = 0;         ///< c for aiding load at eta_o_mid
+    double c_half_width = 0;      ///< max over both c of half the range over the prior
+};
+[[nodiscard]] LoadCoefficientPrior load_coefficient_prior(double tau);
+
+/// A standard error that makes +/-1.96 se cover 95 % of a uniform error of this half-width
+/// (0.95 * half_width / 1.96): used for confounds that are uniform, not Gaussian.
+[[nodiscard]] double uniform_equivalent_se(double half_width);
+
+}  // namespace emadiag
