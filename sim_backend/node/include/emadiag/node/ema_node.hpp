@@ -1,0 +1,98 @@
+#pragma once
+// The simulated EMA node (sim_backend/node/README.md).
+#include "emadiag/can/can_bus.hpp"
+#include "emadiag/can/ema_icd.hpp"
+#include "emadiag/sim/simulator.hpp"
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <random>
+#include <stdexcept>
+#include <string>
+
+namespace emadiag::node {
+
+/// The one exception type of the node; messages start with "[ema_node] ".
+class NodeError : public std::runtime_error {
+public:
+    explicit NodeError(const std::string& message) : std::runtime_error("[ema_node] " + message) {}
+};
+
+enum class Interlock { None, WeightOffWheels, MaintenanceDisabled };
+/// Parses "none", "wow" (weight off wheels), "maintenance"; throws NodeError naming the value.
+[[nodiscard]] Interlock parse_interlock(const std::string& s);
+
+struct EmaNodeFaults {
+    Interlock refuse_ground_test = Interlock::None;  ///< this interlock is open: ENTER_GROUND_TEST is refused
+    double drop_fraction = 0.0;         ///< probability that a telemetry frame is not transmitted
+    double corrupt_crc_fraction = 0.0;  ///< probability that a telemetry frame carries a wrong CRC
+    std::optional<double> silent_after_fraction;  ///< stop transmitting after this fraction of a sequence
+    std::uint64_t seed = 1;                       ///< seed of the fault draws (std::mt19937_64)
+    void validate() const;
+};
+
+struct EmaNodeConfig {
+    sim::SimConfig sim;  ///< sequence is set by each START_SEQUENCE
+    can::EmaIdentification ident;  ///< k_t, J, tau and sample period are filled from sim.params by the constructor
+    double time_scale = 1.0;       ///< 1 = real time; 4 = stream four times slower
+    std::chrono::milliseconds heartbeat_timeout = can::icd::kHeartbeatTimeout;
+    EmaNodeFaults faults;
+};
+
+struct EmaNodeStats {
+    std::uint64_t sequences_started = 0;
+    std::uint64_t sequences_done = 0;
+    std::uint64_t sequences_aborted = 0;
+    std::uint64_t telemetry_frames_sent = 0;
+    std::uint64_t telemetry_frames_dropped = 0;
+    std::uint64_t telemetry_crc_corrupted = 0;
+    std::uint64_t send_failures = 0;
+};
+
+class EmaNode {
+public:
+    /// Validates the configuration (throws NodeError or SimError naming the bad field).
+    EmaNode(can::CanBus& bus, EmaNodeConfig config);
+
+    /// Serves the bus until `stop` becomes true.
+    void run(const std::atomic<bool>& stop);
+    /// One pass of the loop: waits at most `max_wait` for a frame, then does what is due.
+    void poll(std::chrono::microseconds max_wait);
+
+    [[nodiscard]] const can::EmaStatus& status() const { return status_; }
+    [[nodiscard]] const EmaNodeStats& stats() const { return stats_; }
+    [[nodiscard]] bool silent() const { return silent_; }
+
+    /// Called with a one-line description of each state change (the library never prints).
+    std::function<void(const std::string&)> on_event;
+
+private:
+    using Clock = std::chrono::steady_clock;
+    void handle(const can::CanFrame& f, Clock::time_point now);
+    void handle_command(const can::ToolCommand& c, Clock::time_point now);
+    void start_sequence(const can::ToolCommand& c, Clock::time_point now);
+    void stream_due(Clock::time_point now);
+    void finish(can::icd::SequenceState state, can::icd::FaultCode fault, const std::string& why);
+    void send(const can::CanFrame& f);
+    void send_status();
+    void event(const std::string& what);
+
+    can::CanBus& bus_;
+    EmaNodeConfig config_;
+    can::EmaIcd icd_;
+    can::EmaStatus status_;
+    EmaNodeStats stats_;
+    std::mt19937_64 fault_rng_;
+    Clock::time_point next_status_;
+    Clock::time_point last_heartbeat_;
+    bool silent_ = false;
+
+    // The running sequence.
+    struct Running;
+    std::shared_ptr<Running> run_;
+};
+
+}  // namespace emadiag::node

@@ -1,0 +1,290 @@
+// The simulated EMA node: the EMA side of the ICD (can_dbc/ema.dbc) on top of sim_backend.
+#include "emadiag/node/ema_node.hpp"
+
+#include "emadiag/can/can_error.hpp"
+
+#include <cmath>
+#include <future>
+#include <thread>
+#include <sstream>
+
+namespace emadiag::node {
+
+using can::icd::AckResult;
+using can::icd::Command;
+using can::icd::FaultCode;
+using can::icd::Mode;
+using can::icd::SequenceState;
+using can::icd::TestSequence;
+
+namespace {
+
+/// The loop wakes at least this often, so the watchdog fires within this much of its deadline.
+constexpr std::chrono::milliseconds kMaxLoopSleep{2};
+constexpr double kMaxTimeScale = 1000.0;
+
+can::icd::LoadCase icd_load_case(sim::LoadCase c) {
+    switch (c) {
+        case sim::LoadCase::A: return can::icd::LoadCase::A;
+        case sim::LoadCase::AExt: return can::icd::LoadCase::AExt;
+        case sim::LoadCase::B: return can::icd::LoadCase::B;
+    }
+    return can::icd::LoadCase::A;
+}
+
+std::string ms_text(std::chrono::steady_clock::duration d) {
+    std::ostringstream s;
+    s.precision(1);
+    s << std::fixed << std::chrono::duration<double, std::milli>(d).count() << " ms";
+    return s.str();
+}
+
+}  // namespace
+
+Interlock parse_interlock(const std::string& s) {
+    if (s == "none" || s.empty()) return Interlock::None;
+    if (s == "wow") return Interlock::WeightOffWheels;
+    if (s == "maintenance") return Interlock::MaintenanceDisabled;
+    throw NodeError("interlock '" + s + "': expected none, wow or maintenance");
+}
+
+void EmaNodeFaults::validate() const {
+    auto fraction = [](const char* name, double v) {
+        if (!(v >= 0.0 && v <= 1.0)) throw NodeError(std::string(name) + " = " + std::to_string(v) + " outside [0, 1]");
+    };
+    fraction("drop_fraction", drop_fraction);
+    fraction("corrupt_crc_fraction", corrupt_crc_fraction);
+    if (silent_after_fraction) fraction("silent_after_fraction", *silent_after_fraction);
+}
+
+struct EmaNode::Running {
+    std::future<sim::SimResult> simulation;
+    std::vector<sim::Sample> samples;
+    bool streaming = false;
+    Clock::time_point stream_start;
+    std::size_t next = 0;
+    std::size_t silent_at = 0;
+    std::uint8_t counter_a = 0;
+    std::uint8_t counter_b = 0;
+};
+
+EmaNode::EmaNode(can::CanBus& bus, EmaNodeConfig config)
+    : bus_(bus), config_(std::move(config)), fault_rng_(config_.faults.seed) {
+    config_.faults.validate();
+    config_.sim.params.validate();
+    if (!(config_.time_scale >= 1.0 && config_.time_scale <= kMaxTimeScale))
+        throw NodeError("time_scale = " + std::to_string(config_.time_scale) + " outside [1, 1000]");
+    const sim::EmaParams& p = config_.sim.params;
+    config_.ident.k_t_nm_per_a = p.k_t_nm_per_a;
+    config_.ident.j_kgm2 = p.j_kgm2;  // the characterised (datasheet) inertia, not the plant's true one
+    config_.ident.tau = p.tau;
+    config_.ident.sample_period_s = sim::kSamplePeriodS;
+    status_.mode = Mode::Normal;
+    status_.weight_on_wheels = config_.faults.refuse_ground_test != Interlock::WeightOffWheels;
+    status_.maintenance_enable = config_.faults.refuse_ground_test != Interlock::MaintenanceDisabled;
+    status_.load_case = icd_load_case(config_.sim.load_case);
+    next_status_ = Clock::now();
+}
+
+void EmaNode::event(const std::string& what) {
+    if (on_event) on_event(what);
+}
+
+void EmaNode::send(const can::CanFrame& f) {
+    if (silent_) return;
+    if (bus_.send(f) != can::SendStatus::Sent) ++stats_.send_failures;
+}
+
+void EmaNode::send_status() {
+    send(icd_.encode_status(status_));
+    status_.counter = static_cast<std::uint8_t>((status_.counter + 1) % can::icd::kCounterModulo);
+}
+
+void EmaNode::run(const std::atomic<bool>& stop) {
+    while (!stop.load()) poll(kMaxLoopSleep);
+}
+
+void EmaNode::poll(std::chrono::microseconds max_wait) {
+    auto now = Clock::now();
+    // Wait until the next thing that is due (status, sample), at most max_wait.
+    Clock::time_point due = std::min(next_status_, now + max_wait);
+    if (run_ && run_->streaming && run_->next < run_->samples.size()) {
+        const auto sample_due = run_->stream_start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
+                                                         static_cast<double>(run_->next + 1) * sim::kSamplePeriodS * config_.time_scale));
+        due = std::min(due, sample_due);
+    }
+    const auto wait = std::chrono::duration_cast<std::chrono::microseconds>(due - now);
+    can::ReceiveResult r = bus_.receive(std::max(wait, std::chrono::microseconds{0}));
+    now = Clock::now();
+    if (r.status == can::ReceiveStatus::Frame) handle(r.frame, now);
+    else if (r.status == can::ReceiveStatus::BusOff) event("bus-off: " + r.detail);
+    // Drain whatever else is queued without waiting.
+    for (int i = 0; i < 64; ++i) {
+        can::ReceiveResult more = bus_.receive(std::chrono::microseconds{0});
+        if (more.status != can::ReceiveStatus::Frame) break;
+        handle(more.frame, Clock::now());
+    }
+    now = Clock::now();
+
+    // Heartbeat watchdog (ICD: TOOL_Heartbeat missing > 100 ms in GROUND_TEST aborts and holds).
+    if (status_.mode == Mode::GroundTest && status_.state == SequenceState::Running &&
+        now - last_heartbeat_ > config_.heartbeat_timeout) {
+        finish(SequenceState::Aborted, FaultCode::HeartbeatLost,
+               "heartbeat lost: none for " + ms_text(now - last_heartbeat_) + "; holding position");
+    }
+
+    if (run_ && !run_->streaming && run_->simulation.valid() &&
+        run_->simulation.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
+        sim::SimResult result;
+        try {
+            result = run_->simulation.get();
+        } catch (const std::exception& e) {
+            finish(SequenceState::Aborted, FaultCode::SimulationFailed, std::string("simulation failed: ") + e.what());
+            return;
+        }
+        if (!result.finite) {
+            finish(SequenceState::Aborted, FaultCode::SimulationFailed, "simulation diverged (NaN or inf)");
+            return;
+        }
+        run_->samples = std::move(result.samples);
+        run_->streaming = true;
+        run_->stream_start = now;
+        run_->silent_at = config_.faults.silent_after_fraction
+                              ? static_cast<std::size_t>(std::floor(*config_.faults.silent_after_fraction * static_cast<double>(run_->samples.size())))
+                              : run_->samples.size() + 1;
+        event("streaming " + std::to_string(run_->samples.size()) + " samples");
+    }
+    if (run_ && run_->streaming) stream_due(now);
+
+    if (now >= next_status_) {
+        send_status();
+        next_status_ += can::icd::kStatusPeriod;
+        if (next_status_ < now) next_status_ = now + can::icd::kStatusPeriod;
+    }
+}
+
+void EmaNode::handle(const can::CanFrame& f, Clock::time_point now) {
+    if (f.extended || f.error) return;
+    if (f.id == can::icd::kToolHeartbeatId) {
+        last_heartbeat_ = now;
+        return;
+    }
+    if (auto c = icd_.decode_command(f)) handle_command(*c, now);
+}
+
+void EmaNode::handle_command(const can::ToolCommand& c, Clock::time_point now) {
+    can::CommandAck ack{c.command, AckResult::Accepted, c.session_id};
+    const bool running = status_.state == SequenceState::Running;
+    switch (c.command) {
+        case Command::EnterGroundTest:
+            if (!status_.weight_on_wheels) ack.result = AckResult::RefusedWeightOnWheels;
+            else if (!status_.maintenance_enable) ack.result = AckResult::RefusedMaintenanceDisabled;
+            else {
+                status_.mode = Mode::GroundTest;
+                last_heartbeat_ = now;  // the watchdog counts from entry
+                event("entered GROUND_TEST");
+            }
+            if (ack.result != AckResult::Accepted)
+                event("refused ENTER_GROUND_TEST: " + icd_.value_name(icd_.ack, "AckResult", static_cast<int>(ack.result)));
+            break;
+        case Command::LeaveGroundTest:
+            if (running) ack.result = AckResult::RefusedBusy;
+            else if (status_.mode == Mode::GroundTest) {
+                status_.mode = Mode::Normal;
+                event("left GROUND_TEST");
+            }
+            break;
+        case Command::StartSequence:
+            if (status_.mode != Mode::GroundTest) ack.result = AckResult::RefusedNotInGroundTest;
+            else if (running) ack.result = AckResult::RefusedBusy;
+            else if (c.sequence != TestSequence::Dyn && c.sequence != TestSequence::Brk) ack.result = AckResult::RefusedBadArgument;
+            break;
+        case Command::Abort:
+            if (running) finish(SequenceState::Aborted, FaultCode::AbortedByTool, "aborted by the tool; holding position");
+            break;
+        case Command::RequestIdent: break;
+        default: ack.result = AckResult::RefusedUnknownCommand;
+    }
+    send(icd_.encode_ack(ack));
+    if (c.command == Command::RequestIdent)
+        for (const auto& f : icd_.encode_ident(config_.ident)) send(f);
+    if (c.command == Command::StartSequence && ack.result == AckResult::Accepted) start_sequence(c, now);
+}
+
+void EmaNode::start_sequence(const can::ToolCommand& c, Clock::time_point) {
+    sim::SimConfig cfg = config_.sim;
+    cfg.sequence = c.sequence == TestSequence::Dyn ? sim::Sequence::Dyn : sim::Sequence::Brk;
+    cfg.duration_s = 0.0;
+    cfg.record_truth = false;
+    status_.state = SequenceState::Running;
+    status_.sequence = c.sequence;
+    status_.session_id = c.session_id;
+    status_.samples_sent = 0;
+    status_.fault = FaultCode::None;
+    run_ = std::make_shared<Running>();
+    run_->simulation = std::async(std::launch::async, [cfg] { return sim::simulate(cfg); });
+    ++stats_.sequences_started;
+    event("START_SEQUENCE " + sim::to_string(cfg.sequence) + " session " + std::to_string(c.session_id) + ": simulating");
+    send_status();
+}
+
+void EmaNode::stream_due(Clock::time_point now) {
+    Running& r = *run_;
+    const double period_s = sim::kSamplePeriodS * config_.time_scale;
+    while (r.next < r.samples.size()) {
+        const auto due = r.stream_start + std::chrono::duration_cast<Clock::duration>(
+                                              std::chrono::duration<double>(static_cast<double>(r.next + 1) * period_s));
+        if (due > now) return;
+        if (r.next == r.silent_at && !silent_) {
+            event("going silent at sample " + std::to_string(r.next) + " (fault injection)");
+            silent_ = true;
+        }
+        const sim::Sample& s = r.samples[r.next];
+        const auto index = static_cast<std::uint16_t>(r.next);
+        can::CanFrame a, b;
+        try {
+            a = icd_.encode_telemetry_a(index, r.counter_a, s.current_a, s.speed_rad_s);
+            b = icd_.encode_telemetry_b(index, r.counter_b, s.theta_m_rad, s.hinge_moment_nm);
+        } catch (const can::CanError& e) {
+            finish(SequenceState::Aborted, FaultCode::SimulationFailed, std::string("sample out of the ICD range: ") + e.what());
+            return;
+        }
+        r.counter_a = static_cast<std::uint8_t>((r.counter_a + 1) % can::icd::kCounterModulo);
+        r.counter_b = static_cast<std::uint8_t>((r.counter_b + 1) % can::icd::kCounterModulo);
+        std::uniform_real_distribution<double> u(0.0, 1.0);  // only compared against fractions
+        for (can::CanFrame* f : {&a, &b}) {
+            if (config_.faults.corrupt_crc_fraction > 0 && u(fault_rng_) < config_.faults.corrupt_crc_fraction) {
+                f->data[can::icd::kTelemetryCrcBytes] ^= 0x5A;
+                ++stats_.telemetry_crc_corrupted;
+            }
+            if (config_.faults.drop_fraction > 0 && u(fault_rng_) < config_.faults.drop_fraction) {
+                ++stats_.telemetry_frames_dropped;
+                continue;
+            }
+            if (!silent_) {
+                send(*f);
+                ++stats_.telemetry_frames_sent;
+            }
+        }
+        ++r.next;
+        status_.samples_sent = static_cast<std::uint16_t>(r.next);
+    }
+    finish(SequenceState::Done, FaultCode::None, "sequence done: " + std::to_string(r.samples.size()) + " samples");
+}
+
+void EmaNode::finish(SequenceState state, FaultCode fault, const std::string& why) {
+    status_.state = state;
+    status_.fault = fault;
+    if (state == SequenceState::Done) ++stats_.sequences_done;
+    else ++stats_.sequences_aborted;
+    if (run_ && run_->simulation.valid()) {
+        // Detach from a simulation still running: keep it alive in the shared state until done.
+        auto keep = run_;
+        std::thread([keep] { keep->simulation.wait(); }).detach();
+    }
+    run_.reset();
+    event(why);
+    send_status();  // report the change at once, not at the next 20 ms tick
+}
+
+}  // namespace emadiag::node
