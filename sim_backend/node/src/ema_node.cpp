@@ -22,6 +22,8 @@ namespace {
 /// The loop wakes at least this often, so the watchdog fires within this much of its deadline.
 constexpr std::chrono::milliseconds kMaxLoopSleep{2};
 constexpr double kMaxTimeScale = 1000.0;
+/// XOR applied to the CRC byte of a frame chosen for corruption (any non-zero value is detected).
+constexpr std::uint8_t kCrcCorruption = 0x5A;
 
 can::icd::LoadCase icd_load_case(sim::LoadCase c) {
     switch (c) {
@@ -253,18 +255,20 @@ void EmaNode::stream_due(Clock::time_point now) {
         r.counter_b = static_cast<std::uint8_t>((r.counter_b + 1) % can::icd::kCounterModulo);
         std::uniform_real_distribution<double> u(0.0, 1.0);  // only compared against fractions
         for (can::CanFrame* f : {&a, &b}) {
-            if (config_.faults.corrupt_crc_fraction > 0 && u(fault_rng_) < config_.faults.corrupt_crc_fraction) {
-                f->data[can::icd::kTelemetryCrcBytes] ^= 0x5A;
-                ++stats_.telemetry_crc_corrupted;
-            }
-            if (config_.faults.drop_fraction > 0 && u(fault_rng_) < config_.faults.drop_fraction) {
+            // Two draws per frame, always, so the fault pattern depends only on the seed.
+            const bool corrupt = config_.faults.corrupt_crc_fraction > 0 && u(fault_rng_) < config_.faults.corrupt_crc_fraction;
+            const bool drop = config_.faults.drop_fraction > 0 && u(fault_rng_) < config_.faults.drop_fraction;
+            if (silent_) continue;
+            if (drop) {
                 ++stats_.telemetry_frames_dropped;
                 continue;
             }
-            if (!silent_) {
-                send(*f);
-                ++stats_.telemetry_frames_sent;
+            if (corrupt) {
+                f->data[can::icd::kTelemetryCrcBytes] ^= kCrcCorruption;
+                ++stats_.telemetry_crc_corrupted;
             }
+            send(*f);
+            ++stats_.telemetry_frames_sent;
         }
         ++r.next;
         status_.samples_sent = static_cast<std::uint16_t>(r.next);
