@@ -25,6 +25,7 @@ struct TrainCliOptions {
     std::uint64_t seed = 1;
     int max_epochs = 1000;
     int max_fail = 12;
+    double goal = 1e-6;
 };
 
 std::vector<std::string> default_outputs(const std::string& load_case) {
@@ -58,6 +59,7 @@ const bool registered = register_command(Command{
         sub.add_option("--seed", o->seed, "Seed of the split and of the initial weights")->default_val(1);
         sub.add_option("--max-epochs", o->max_epochs, "SCG epoch limit")->default_val(1000);
         sub.add_option("--max-fail", o->max_fail, "Validation failures before stopping")->default_val(12);
+        sub.add_option("--goal", o->goal, "Training MSE goal, normalised [0, 1] space (the paper: 1e-6)")->default_val(1e-6);
         return [o] {
             const Dataset d = read_dataset(o->dataset);
             TrainOptions t;
@@ -76,6 +78,7 @@ const bool registered = register_command(Command{
             t.init_seed = o->seed + 1;
             t.scg.max_epochs = o->max_epochs;
             t.scg.max_fail = o->max_fail;
+            t.scg.goal = o->goal;
             const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
             const FeatureSet f = build_features(d, t.spec, o->runs, threads);
             TrainReport rep = train_network(f, t);

@@ -74,7 +74,7 @@ std::string classify_simulation(const sim::SimResult& result, const sim::EmaPara
     constexpr double kRadToDeg = 57.29577951308232;
     for (const auto& s : result.samples) {
         if (std::abs(s.current_a) > params.i_max_a + kFilterCurrentMarginA ||
-            std::abs(s.speed_rad_s) > params.w_max_rad_s + kFilterSpeedMarginRadS ||
+            std::abs(s.speed_rad_s) > params.v_dc_v / params.k_t_nm_per_a ||
             std::abs(s.theta_m_rad / params.tau * kRadToDeg) > params.stop_deg + kFilterAngleMarginDeg) {
             return "non_physical";
         }

@@ -62,9 +62,9 @@ struct FilterCounts {
     int non_physical = 0;   ///< current, speed or angle beyond the actuator's physical limits
 };
 
-/// Thresholds of the bad-simulation filter.
+/// Thresholds of the bad-simulation filter. Speed is bounded by the no-load speed V_dc / k_t (the
+/// speed demand w_max is a controller limit the speed may overshoot).
 inline constexpr double kFilterCurrentMarginA = 1.0;      ///< |I| <= I_max + margin (chatter lifts the mean)
-inline constexpr double kFilterSpeedMarginRadS = 10.0;    ///< |w| <= w_max + margin
 inline constexpr double kFilterAngleMarginDeg = 0.5;      ///< |theta_u| <= stop + margin
 inline constexpr double kLimitCycleSpeedRadS = 20.0;      ///< reversals count only above this speed
 inline constexpr int kLimitCycleMaxReversals = 12;        ///< more large-speed reversals = limit cycle

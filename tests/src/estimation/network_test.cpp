@@ -1,0 +1,191 @@
+// GCC 12 reports false -Wmaybe-uninitialized inside Eigen's AVX-512 kernels.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+// The paper's network: satlins/tansig, resampling, features, JSON round trip, and the shipped
+// models (models/*.json) loading and predicting simulated runs.
+#include "estimation/network.hpp"
+#include "estimation/network_model.hpp"
+
+#include "core/sim_run.hpp"
+#include "estimation/dataset.hpp"
+#include "emadiag/sim/simulator.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+namespace emadiag {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::ThrowsMessage;
+
+TEST(NetworkTest, SatlinsClampsToMinusOneOne) {
+    EXPECT_EQ(satlins(-3.0), -1.0);
+    EXPECT_EQ(satlins(-1.0), -1.0);
+    EXPECT_EQ(satlins(-0.25), -0.25);
+    EXPECT_EQ(satlins(0.0), 0.0);
+    EXPECT_EQ(satlins(0.7), 0.7);
+    EXPECT_EQ(satlins(1.0), 1.0);
+    EXPECT_EQ(satlins(42.0), 1.0);
+}
+
+TEST(NetworkTest, TansigIsMatlabFormula) {
+    for (double n : {-3.0, -0.5, 0.0, 0.1, 2.0}) {
+        EXPECT_NEAR(tansig(n), 2.0 / (1.0 + std::exp(-2.0 * n)) - 1.0, 1e-15) << "n = " << n;
+    }
+}
+
+TEST(NetworkTest, ForwardClampsOutputsSoPredictionsStayInZeroOne) {
+    Network net(2, 1, 2);
+    Eigen::VectorXd w(2 + 1 + 2 + 2);
+    // hidden = tanh(x0 + x1); outputs 5 h + 0 and -5 h + 0.1
+    w << 1, 1, 0, 5, -5, 0, 0.1;
+    net.unflatten(w);
+    Eigen::MatrixXd x(2, 2);
+    x << 1, 0, 1, 0;
+    const Eigen::MatrixXd y = net.forward(x);
+    EXPECT_EQ(y(0, 0), 1.0);   // 5 tanh(2) clamped
+    EXPECT_EQ(y(1, 0), -1.0);  // -5 tanh(2) + 0.1 clamped
+    EXPECT_EQ(y(0, 1), 0.0);
+    EXPECT_DOUBLE_EQ(y(1, 1), 0.1);
+    EXPECT_EQ(from_internal(y(0, 0)), 1.0);
+    EXPECT_EQ(from_internal(y(1, 0)), 0.0);
+}
+
+TEST(NetworkTest, FlattenUnflattenAndJsonRoundTrip) {
+    Network net(4, 3, 2);
+    net.initialise(99);
+    const Eigen::VectorXd w = net.flatten();
+    EXPECT_EQ(w.size(), 4 * 3 + 3 + 3 * 2 + 2);
+    Network back = Network::from_json(net.to_json(), "net");
+    EXPECT_EQ(back.flatten(), w);
+    EXPECT_THAT([&] { net.unflatten(Eigen::VectorXd::Zero(3)); },
+                ThrowsMessage<std::runtime_error>(HasSubstr("weight vector has 3 values, the network 23")));
+}
+
+TEST(NetworkTest, InitialisationIsSeeded) {
+    Network a(5, 4, 1), b(5, 4, 1), c(5, 4, 1);
+    a.initialise(3);
+    b.initialise(3);
+    c.initialise(4);
+    EXPECT_EQ(a.flatten(), b.flatten());
+    EXPECT_NE(a.flatten(), c.flatten());
+}
+
+TEST(NetworkTest, ResampleLinearInterpolatesAndKeepsEnds) {
+    const std::vector<double> t = {0.0, 1.0, 2.0, 4.0};
+    const std::vector<double> y = {0.0, 10.0, 20.0, 0.0};
+    const auto r = resample_linear(t, y, 5);  // 0, 1, 2, 3, 4
+    ASSERT_EQ(r.size(), 5u);
+    EXPECT_DOUBLE_EQ(r[0], 0.0);
+    EXPECT_DOUBLE_EQ(r[1], 10.0);
+    EXPECT_DOUBLE_EQ(r[2], 20.0);
+    EXPECT_DOUBLE_EQ(r[3], 10.0);
+    EXPECT_DOUBLE_EQ(r[4], 0.0);
+    EXPECT_THAT([&] { (void)resample_linear(t, y, 1); }, ThrowsMessage<std::runtime_error>(HasSubstr("n 1 is below 2")));
+}
+
+TEST(NetworkTest, InputNormalisationMapsTrainingRangeToZeroOne) {
+    Eigen::MatrixXd x(2, 3);
+    x << 1, 2, 3, 5, 5, 5;
+    const InputNormalisation n = InputNormalisation::fit(x);
+    const Eigen::MatrixXd u = n.apply(x);
+    EXPECT_DOUBLE_EQ(u(0, 0), 0.0);
+    EXPECT_DOUBLE_EQ(u(0, 1), 0.5);
+    EXPECT_DOUBLE_EQ(u(0, 2), 1.0);
+    EXPECT_DOUBLE_EQ(u(1, 1), 0.0);  // constant input
+}
+
+TEST(NetworkTest, FeaturesHaveTimestepsPerSignal) {
+    sim::SimConfig c;
+    c.load_case = sim::LoadCase::B;
+    const emadiag::Run run = make_run(c, sim::simulate(c));
+    NetworkSpec spec;
+    spec.timesteps = 100;
+    spec.with_speed = true;
+    spec.with_load = true;
+    spec.outputs = {kParamFdj};
+    const Eigen::VectorXd x = network_features(run, spec);
+    ASSERT_EQ(x.size(), 300);
+    // The speed block ends at the last sample's speed, the load block at the last F_R.
+    EXPECT_DOUBLE_EQ(x(199), run.samples.back().speed_rad_s);
+    EXPECT_DOUBLE_EQ(x(299), run.samples.back().hinge_moment_nm / run.constants.tau);
+}
+
+// ---- shipped models
+struct ShippedModel {
+    const char* file;
+    sim::LoadCase load_case;
+};
+
+std::string model_path(const char* file) { return std::string(EMADIAG_SOURCE_DIR) + "/models/" + file; }
+
+class ShippedModelTest : public ::testing::TestWithParam<ShippedModel> {};
+
+TEST_P(ShippedModelTest, LoadsAndPredictsASimulatedRunWithinItsUncertainty) {
+    const ShippedModel m = GetParam();
+    const NetworkModel model = NetworkModel::load(model_path(m.file));
+    EXPECT_EQ(model.spec.load_case, sim::to_string(m.load_case));
+    // A run the model never saw, at an off-nominal health state.
+    sim::SimConfig c;
+    c.load_case = m.load_case;
+    c.params.fdj_nm = 0.0712;
+    c.params.fsj_nm = 0.131;
+    c.params.eta_o = 0.87;
+    c.params.eta_a = sim::eta_a_from_eta_o(c.params.eta_o, c.params.tau);
+    const emadiag::Run run = make_run(c, sim::simulate(c));
+    const HealthEstimate h = model.estimate(run);
+    EXPECT_EQ(h.estimator, "network");
+    ASSERT_EQ(h.parameters.size(), 4u);
+    // Within 4 calibrated standard errors (a 95 % interval is 1.96).
+    constexpr double kSigmas = 4.0;
+    const ParameterEstimate* fdj = h.find(kParamFdj);
+    ASSERT_TRUE(fdj != nullptr && fdj->value);
+    EXPECT_GT(fdj->std_error, 0.0);
+    EXPECT_NEAR(*fdj->value, c.params.fdj_nm, kSigmas * fdj->std_error) << m.file;
+    const ParameterEstimate* fsj = h.find(kParamFsj);
+    ASSERT_NE(fsj, nullptr);
+    EXPECT_FALSE(fsj->identifiable);
+    EXPECT_FALSE(fsj->value);
+    EXPECT_THAT(fsj->note, HasSubstr("not identifiable"));
+    const ParameterEstimate* eta_o = h.find(kParamEtaO);
+    ASSERT_NE(eta_o, nullptr);
+    if (m.load_case == sim::LoadCase::A) {
+        EXPECT_FALSE(eta_o->identifiable);
+        EXPECT_FALSE(eta_o->value);
+    } else {
+        ASSERT_TRUE(eta_o->value);
+        EXPECT_NEAR(*eta_o->value, c.params.eta_o, kSigmas * eta_o->std_error) << m.file;
+        const ParameterEstimate* eta_a = h.find(kParamEtaA);
+        ASSERT_TRUE(eta_a != nullptr && eta_a->value);
+        EXPECT_NEAR(*eta_a->value, c.params.eta_a, kSigmas * eta_a->std_error) << m.file;
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Models, ShippedModelTest,
+                         ::testing::Values(ShippedModel{"case_a.json", sim::LoadCase::A},
+                                           ShippedModel{"case_a_ext.json", sim::LoadCase::AExt},
+                                           ShippedModel{"case_b.json", sim::LoadCase::B}));
+
+TEST(NetworkModelTest, RejectsARunOfAnotherCase) {
+    const NetworkModel model = NetworkModel::load(model_path("case_b.json"));
+    sim::SimConfig c;
+    c.load_case = sim::LoadCase::A;
+    const emadiag::Run run = make_run(c, sim::simulate(c));
+    EXPECT_THAT([&] { (void)model.estimate(run); },
+                ThrowsMessage<std::runtime_error>(HasSubstr("trained on case B, sequence dyn; the run is case A")));
+}
+
+TEST(NetworkModelTest, LoadNamesTheFileAndField) {
+    EXPECT_THAT([] { (void)NetworkModel::load("/nonexistent/model.json"); },
+                ThrowsMessage<std::runtime_error>(HasSubstr("cannot open network model /nonexistent/model.json")));
+    nlohmann::json j = NetworkModel::load(model_path("case_b.json")).to_json();
+    j["version"] = 99;
+    EXPECT_THAT([&] { (void)NetworkModel::from_json(j, "m.json"); },
+                ThrowsMessage<std::runtime_error>(HasSubstr("m.json: field version 99 is not supported")));
+}
+
+}  // namespace
+}  // namespace emadiag
