@@ -1,0 +1,327 @@
+// The vcan suite: emadiag ema-sim and emadiag record (and can-utils) as separate processes on a
+// real SocketCAN vcan bus. Interface: $EMADIAG_VCAN_IFACE (default vcan0). Telemetry pacing:
+// $EMADIAG_VCAN_TIME_SCALE (default 2: 2000 frames/s, what vcan inside user-mode Linux carries
+// without loss; 1 is real time).
+#include "can_tool/candump_run.hpp"
+#include "core/run_csv.hpp"
+#include "emadiag/can/ema_icd.hpp"
+#include "emadiag/can/socketcan_bus.hpp"
+#include "emadiag/sim/simulator.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <dirent.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+extern char** environ;
+
+using namespace emadiag;
+using ::testing::HasSubstr;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+std::string iface() {
+    const char* v = std::getenv("EMADIAG_VCAN_IFACE");
+    return v ? v : "vcan0";
+}
+std::string time_scale() {
+    const char* v = std::getenv("EMADIAG_VCAN_TIME_SCALE");
+    return v ? v : "2";
+}
+std::string bus_spec() { return "socketcan:" + iface(); }
+
+std::string slurp(const std::string& path) {
+    std::ifstream in(path);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+/// A child process with stdout and stderr in files.
+class Process {
+public:
+    Process(const std::vector<std::string>& args, const std::string& out_path, const std::string& cwd = "")
+        : out_path_(out_path), err_path_(out_path + ".err") {
+        posix_spawn_file_actions_t fa;
+        posix_spawn_file_actions_init(&fa);
+        posix_spawn_file_actions_addopen(&fa, 1, out_path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        posix_spawn_file_actions_addopen(&fa, 2, err_path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        std::vector<std::string> a = args;
+        std::string prog = a[0];
+        if (!cwd.empty()) {  // run through sh to change directory (posix_spawn has no chdir before glibc 2.29 API use)
+            std::string cmd = "cd '" + cwd + "' && exec";
+            for (const auto& s : args) cmd += " '" + s + "'";
+            a = {"/bin/sh", "-c", cmd};
+            prog = "/bin/sh";
+        }
+        std::vector<char*> argv;
+        for (auto& s : a) argv.push_back(s.data());
+        argv.push_back(nullptr);
+        const int rc = posix_spawnp(&pid_, prog.c_str(), &fa, nullptr, argv.data(), environ);
+        posix_spawn_file_actions_destroy(&fa);
+        if (rc != 0) throw std::runtime_error("cannot start " + prog);
+    }
+    ~Process() {
+        if (pid_ > 0 && !exited_) {
+            ::kill(pid_, SIGKILL);
+            int st;
+            ::waitpid(pid_, &st, 0);
+        }
+    }
+    void signal(int sig) const { ::kill(pid_, sig); }
+    /// Exit code, or -1 on timeout (the process is then killed).
+    int wait(std::chrono::milliseconds timeout) {
+        const auto end = Clock::now() + timeout;
+        while (Clock::now() < end) {
+            int st = 0;
+            const pid_t r = ::waitpid(pid_, &st, WNOHANG);
+            if (r == pid_) {
+                exited_ = true;
+                return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+            }
+            std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        }
+        ::kill(pid_, SIGKILL);
+        int st;
+        ::waitpid(pid_, &st, 0);
+        exited_ = true;
+        return -1;
+    }
+    /// Waits until stdout contains `text`.
+    bool wait_output(const std::string& text, std::chrono::milliseconds timeout) const {
+        const auto end = Clock::now() + timeout;
+        while (Clock::now() < end) {
+            if (out().find(text) != std::string::npos) return true;
+            std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        }
+        return false;
+    }
+    std::string out() const { return slurp(out_path_); }
+    std::string err() const { return slurp(err_path_); }
+
+private:
+    pid_t pid_ = -1;
+    bool exited_ = false;
+    std::string out_path_, err_path_;
+};
+
+class Vcan : public ::testing::Test {
+public:
+    void SetUp() override {
+        const char* t = std::getenv("TMPDIR");
+        dir_ = std::string(t ? t : "/tmp") + "/emadiag_vcan_" + std::to_string(::getpid()) + "_" +
+               ::testing::UnitTest::GetInstance()->current_test_info()->name();
+        ASSERT_EQ(std::system(("rm -rf '" + dir_ + "' && mkdir -p '" + dir_ + "'").c_str()), 0);
+        // Fail (never skip) when the bus is missing.
+        ASSERT_NO_THROW(can::SocketCanBus probe(iface())) << "no " << iface() << ": run scripts/vcan/run_vcan_tests.sh";
+    }
+    std::string path(const std::string& name) const { return dir_ + "/" + name; }
+
+    std::unique_ptr<Process> start_ema(std::vector<std::string> extra, const std::string& name = "ema") {
+        std::vector<std::string> args{EMADIAG_CLI, "ema-sim", "--bus", bus_spec(), "--time-scale", time_scale(), "--exit-after", "1"};
+        args.insert(args.end(), extra.begin(), extra.end());
+        auto p = std::make_unique<Process>(args, path(name + ".out"));
+        EXPECT_TRUE(p->wait_output("ema-sim on", std::chrono::seconds(10))) << p->err();
+        return p;
+    }
+    std::unique_ptr<Process> start_record(const std::string& seq, const std::string& stem, std::vector<std::string> extra = {}) {
+        std::vector<std::string> args{EMADIAG_CLI, "record", "--bus", bus_spec(), "--sequence", seq, "--out", path(stem)};
+        args.insert(args.end(), extra.begin(), extra.end());
+        return std::make_unique<Process>(args, path(stem + ".out"));
+    }
+
+    std::string dir_;
+};
+
+::testing::AssertionResult matches_simulation(const Run& got, const sim::SimResult& want) {
+    if (got.samples.size() != want.samples.size())
+        return ::testing::AssertionFailure() << got.samples.size() << " samples, direct simulation has " << want.samples.size();
+    constexpr double kSlack = 1e-9;
+    const double lim[] = {1e-12, sim::kCurrentResolutionA / 2, sim::kSpeedResolutionRadS / 2, sim::kThetaResolutionRad / 2,
+                          sim::kHingeResolutionNm / 2, 1e-9};
+    double worst[6] = {0, 0, 0, 0, 0, 0};
+    for (std::size_t k = 0; k < got.samples.size(); ++k) {
+        const auto& g = got.samples[k];
+        const auto& w = want.samples[k];
+        const double d[] = {std::abs(g.t_s - w.t_s), std::abs(g.current_a - w.current_a), std::abs(g.speed_rad_s - w.speed_rad_s),
+                            std::abs(g.theta_m_rad - w.theta_m_rad), std::abs(g.hinge_moment_nm - w.hinge_moment_nm),
+                            std::abs(g.command_deg - w.command_deg)};
+        for (int i = 0; i < 6; ++i) {
+            worst[i] = std::max(worst[i], d[i]);
+            if (d[i] > lim[i] + kSlack)
+                return ::testing::AssertionFailure() << "sample " << k << " column " << i << " differs by " << d[i] << " > " << lim[i];
+        }
+    }
+    std::cout << "  largest differences: current " << worst[1] << " A, speed " << worst[2] << " rad/s, theta " << worst[3]
+              << " rad, hinge " << worst[4] << " N m\n";
+    return ::testing::AssertionSuccess();
+}
+
+void check_session(Vcan& t, const std::string& seq, sim::Sequence sseq, const std::string& stem) {
+    auto ema = t.start_ema({"--case", "B", "--noise", "typical", "--seed", "31"}, "ema");
+    auto rec = t.start_record(seq, stem, {});
+    const int rc = rec->wait(std::chrono::seconds(60));
+    std::cout << rec->out();
+    ASSERT_EQ(rc, 0) << rec->out() << rec->err() << ema->out();
+    EXPECT_EQ(ema->wait(std::chrono::seconds(10)), 0);
+    const emadiag::Run run = read_run_csv_file(t.path(stem + ".csv"));
+    EXPECT_EQ(run.meta_value("valid"), std::optional<std::string>("true"));
+    EXPECT_EQ(run.meta_value("frames_lost"), std::optional<std::string>("0"));
+    EXPECT_EQ(run.meta_value("crc_failures"), std::optional<std::string>("0"));
+    EXPECT_EQ(run.sequence, seq);
+    EXPECT_EQ(run.load_case, "B");
+    EXPECT_EQ(run.constants.k_t_nm_per_a, static_cast<double>(0.2f));
+    sim::SimConfig direct;
+    direct.load_case = sim::LoadCase::B;
+    direct.noise = sim::NoiseProfile::Typical;
+    direct.seed = 31;
+    direct.sequence = sseq;
+    EXPECT_TRUE(matches_simulation(run, sim::simulate(direct)));
+}
+
+}  // namespace
+
+TEST_F(Vcan, DynOverVcanMatchesDirectSimulation) {
+    check_session(*this, "dyn", sim::Sequence::Dyn, "dyn");
+}
+
+TEST_F(Vcan, BrkOverVcanMatchesDirectSimulation) {
+    check_session(*this, "brk", sim::Sequence::Brk, "brk");
+}
+
+TEST_F(Vcan, NoEmaIsAClearError) {
+    auto rec = start_record("dyn", "none");
+    EXPECT_EQ(rec->wait(std::chrono::seconds(10)), 1);
+    EXPECT_THAT(rec->err(), HasSubstr("no EMA answered on " + bus_spec() +
+                                      " within 500 ms: waited for EMA_Ident (0x022, 5 pages) after TOOL_Command REQUEST_IDENT"));
+}
+
+TEST_F(Vcan, InterlockRefusalIsAClearErrorWithTheReason) {
+    auto ema = start_ema({"--refuse-ground-test", "wow"});
+    auto rec = start_record("dyn", "refused");
+    EXPECT_EQ(rec->wait(std::chrono::seconds(10)), 1);
+    EXPECT_THAT(rec->err(), HasSubstr("refused ENTER_GROUND_TEST: REFUSED_WEIGHT_ON_WHEELS (interlocks: WeightOnWheels=AIRBORNE"));
+    ema->signal(SIGINT);
+    EXPECT_EQ(ema->wait(std::chrono::seconds(5)), 0);
+}
+
+TEST_F(Vcan, HeartbeatStopsThenEmaAbortsWithin100ms) {
+    auto ema = start_ema({"--case", "A"});
+    const can::EmaIcd icd;
+    can::SocketCanBus tool(iface());
+    can::SocketCanBus observer(iface());  // sees the tool's frames and the EMA's, with kernel timestamps
+    ASSERT_EQ(tool.send(icd.encode_command({can::icd::Command::EnterGroundTest, {}, 0})), can::SendStatus::Sent);
+    ASSERT_EQ(tool.send(icd.encode_command({can::icd::Command::StartSequence, can::icd::TestSequence::Brk, 21})), can::SendStatus::Sent);
+    // 50 Hz heartbeat for 300 ms, then none.
+    for (int i = 0; i < 15; ++i) {
+        ASSERT_EQ(tool.send(icd.encode_heartbeat(static_cast<std::uint8_t>(i))), can::SendStatus::Sent);
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    std::chrono::nanoseconds last_heartbeat{0}, aborted_at{0}, last_telemetry{0};
+    std::optional<can::EmaStatus> aborted;
+    const auto end = Clock::now() + std::chrono::seconds(3);
+    while (Clock::now() < end) {
+        auto r = observer.receive(std::chrono::milliseconds(50));
+        if (!r.has_frame()) continue;
+        if (r.frame.id == can::icd::kToolHeartbeatId) last_heartbeat = r.frame.timestamp;
+        if (r.frame.id == can::icd::kTelemetryAId || r.frame.id == can::icd::kTelemetryBId) last_telemetry = r.frame.timestamp;
+        auto s = icd.decode_status(r.frame);
+        if (s && !aborted && s->state == can::icd::SequenceState::Aborted) {
+            aborted = s;
+            aborted_at = r.frame.timestamp;
+        }
+    }
+    ASSERT_TRUE(aborted) << ema->out();
+    EXPECT_EQ(aborted->fault, can::icd::FaultCode::HeartbeatLost);
+    const double ms = std::chrono::duration<double, std::milli>(aborted_at - last_heartbeat).count();
+    std::cout << "  EMA_Status ABORTED (HEARTBEAT_LOST) " << ms << " ms after the last heartbeat\n";
+    EXPECT_GE(ms, 100.0);
+    EXPECT_LE(ms, 125.0) << "abort must follow the 100 ms deadline within the node's loop period and scheduling";
+    EXPECT_LE(last_telemetry, aborted_at) << "telemetry after the abort";
+    EXPECT_EQ(ema->wait(std::chrono::seconds(5)), 0);
+    EXPECT_THAT(ema->out(), HasSubstr("heartbeat lost"));
+}
+
+TEST_F(Vcan, InjectedFrameLossAndCrcErrorsAreDetected) {
+    auto ema = start_ema({"--case", "B", "--drop-fraction", "0.01", "--corrupt-crc-fraction", "0.005", "--fault-seed", "3"});
+    auto rec = start_record("dyn", "faults");
+    EXPECT_EQ(rec->wait(std::chrono::seconds(60)), 2) << rec->out() << rec->err();  // invalid run
+    EXPECT_EQ(ema->wait(std::chrono::seconds(10)), 0);
+    std::cout << rec->out() << ema->out();
+    EXPECT_THAT(rec->err(), HasSubstr("run invalid: telemetry loss"));
+    const emadiag::Run run = read_run_csv_file(path("faults.csv"));
+    EXPECT_EQ(run.meta_value("valid"), std::optional<std::string>("false"));
+    // The tool's counts equal what the EMA injected.
+    unsigned long long sent = 0, dropped = 0, corrupted = 0, started = 0, done = 0, aborted = 0;
+    const std::string o = ema->out();
+    const auto at = o.find("ema-sim: ");
+    ASSERT_NE(at, std::string::npos);
+    ASSERT_EQ(std::sscanf(o.c_str() + at,
+                          "ema-sim: %llu sequences started, %llu done, %llu aborted; %llu telemetry frames sent, %llu dropped, %llu CRC corrupted",
+                          &started, &done, &aborted, &sent, &dropped, &corrupted),
+              6);
+    EXPECT_GT(dropped, 0u);
+    EXPECT_GT(corrupted, 0u);
+    EXPECT_EQ(run.meta_value("frames_lost"), std::optional<std::string>(std::to_string(dropped)));
+    EXPECT_EQ(run.meta_value("crc_failures"), std::optional<std::string>(std::to_string(corrupted)));
+}
+
+TEST_F(Vcan, CandumpRecordingDecodesToTheSameSamples) {
+    auto ema = start_ema({"--case", "B", "--noise", "typical", "--seed", "5"});
+    Process candump({"candump", "-l", iface()}, path("candump.out"), dir_);
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    auto rec = start_record("dyn", "session");
+    ASSERT_EQ(rec->wait(std::chrono::seconds(60)), 0) << rec->out() << rec->err();
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    candump.signal(SIGINT);
+    candump.wait(std::chrono::seconds(5));
+    std::string log;
+    if (DIR* d = ::opendir(dir_.c_str())) {
+        while (dirent* e = ::readdir(d))
+            if (std::string(e->d_name).rfind("candump-", 0) == 0) log = path(e->d_name);
+        ::closedir(d);
+    }
+    ASSERT_FALSE(log.empty()) << "candump -l wrote no candump-*.log in " << dir_ << candump.err();
+    const emadiag::Run ours = read_run_csv_file(path("session.csv"));
+    const emadiag::Run theirs = read_run_candump(log);
+    ASSERT_EQ(theirs.samples.size(), ours.samples.size());
+    ASSERT_EQ(theirs.samples.size(), 1000u);
+    for (std::size_t k = 0; k < ours.samples.size(); ++k) {
+        ASSERT_EQ(theirs.samples[k].t_s, ours.samples[k].t_s) << k;
+        ASSERT_EQ(theirs.samples[k].current_a, ours.samples[k].current_a) << k;
+        ASSERT_EQ(theirs.samples[k].speed_rad_s, ours.samples[k].speed_rad_s) << k;
+        ASSERT_EQ(theirs.samples[k].theta_m_rad, ours.samples[k].theta_m_rad) << k;
+        ASSERT_EQ(theirs.samples[k].hinge_moment_nm, ours.samples[k].hinge_moment_nm) << k;
+    }
+    EXPECT_EQ(theirs.meta_value("valid"), std::optional<std::string>("true"));
+    EXPECT_EQ(ema->wait(std::chrono::seconds(10)), 0);
+}
+
+TEST_F(Vcan, CansendAbortStopsTheEma) {
+    auto ema = start_ema({"--case", "A"});
+    auto rec = start_record("brk", "aborted");
+    ASSERT_TRUE(ema->wait_output("streaming", std::chrono::seconds(20))) << ema->out();
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    Process cansend({"cansend", iface(), "010#04000000"}, path("cansend.out"));
+    EXPECT_EQ(cansend.wait(std::chrono::seconds(5)), 0) << cansend.err();
+    EXPECT_EQ(rec->wait(std::chrono::seconds(20)), 130) << rec->out() << rec->err();
+    EXPECT_EQ(ema->wait(std::chrono::seconds(10)), 0);
+    EXPECT_THAT(ema->out(), HasSubstr("aborted by the tool"));
+    const emadiag::Run run = read_run_csv_file(path("aborted.csv"));
+    EXPECT_EQ(run.meta_value("status"), std::optional<std::string>("aborted"));
+    EXPECT_LT(run.samples.size(), 1600u);
+    const emadiag::Run from_log = read_run_candump(path("aborted.log"));
+    EXPECT_EQ(from_log.meta_value("status"), std::optional<std::string>("aborted"));
+}
