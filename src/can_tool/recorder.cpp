@@ -100,6 +100,8 @@ RecordOutcome Recorder::record(const std::atomic<bool>& interrupt) {
         fail(no_answer("EMA_CommandAck (0x021)", "TOOL_Command ENTER_GROUND_TEST (0x010)"));
     if (last_ack_->result != can::icd::AckResult::Accepted) {
         std::string why = icd.value_name(icd.ack, "AckResult", static_cast<int>(last_ack_->result));
+        // The interlock states come with the 50 Hz status: wait for one if none has arrived yet.
+        (void)pump(Clock::now() + 2 * can::icd::kStatusPeriod + kMaxReceiveWait, [&] { return decoder_.last_status().has_value(); });
         if (const auto& s = decoder_.last_status())
             why += " (interlocks: WeightOnWheels=" + icd.value_name(icd.status, "WeightOnWheels", s->weight_on_wheels) +
                    ", MaintenanceEnable=" + icd.value_name(icd.status, "MaintenanceEnable", s->maintenance_enable) + ")";

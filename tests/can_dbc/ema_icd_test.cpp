@@ -113,3 +113,19 @@ TEST(EmaIcd, ControlMessagesRoundTrip) {
     EXPECT_EQ(g.tau, 800.0);
     EXPECT_NEAR(g.sample_period_s, 5e-4, 1e-15);
 }
+
+#include "emadiag/can/bus_load.hpp"
+
+TEST(EmaIcd, WorstCaseBusLoadAtOneMegabitIsAtMost60Percent) {
+    static_assert(worst_case_frame_bits(8, false) == 135);
+    static_assert(worst_case_frame_bits(1, false) == 65);
+    static_assert(worst_case_frame_bits(0, false) == 55);
+    static_assert(worst_case_frame_bits(8, true) == 160);
+    constexpr double kBitrate = 1e6;
+    constexpr double kMaxLoad = 0.60;
+    const BusLoad load = cyclic_bus_load(ema_database(), kBitrate);
+    std::cout << load.table();
+    ASSERT_EQ(load.lines.size(), 4u);  // TOOL_Heartbeat, EMA_Status, EMA_TelemetryA, EMA_TelemetryB
+    EXPECT_DOUBLE_EQ(load.bits_per_s, 2 * 2000 * 135 + 50 * 135 + 50 * 65);
+    EXPECT_LE(load.fraction(), kMaxLoad);
+}
