@@ -14,18 +14,24 @@
 //  2. The breakaway time t_b:
 //     - clean data: the first sample with d w > 0 brackets t_b to one period; inside it, t_b is
 //       the best fit of the slip trajectory below (or the middle of the period if that fails);
-//     - noisy data: a profile least-squares fit of the slip trajectory, between the ramp start
-//       and the ramp end (the current jump when the position hold takes over): for t > t_b,
-//       J dw/dt = g0 + g1 (t - t_b), g1 known from the ramp rate and the load slope, g0 and the
-//       start angle free; speeds are period means, angles end-of-period values.
+//     - noisy data: a profile least-squares fit of the slip trajectory up to the ramp end: for
+//       t > t_b, J dw/dt = g0 + g1 (t - t_b), g1 known from the ramp rate and the load slope;
+//       the start angle is the hold angle and the sequence's end condition (the shaft has moved
+//       kBrkMoveRad at the ramp end, timed from the current's switch to the hold demand inside
+//       its sample) fixes g0, so t_b is the only unknown. Speeds are period means, angles
+//       end-of-period values.
 //  3. I_ref(t) = I_start + d ramp_rate (t - t_start): I_start is the hold demand from the
 //     controller law (theta measured, w = 0), t_start the sequence's ramp start (the second ramp:
-//     100 ms after the exact move end on clean data). On noisy data the second ramp instead fits
-//     I_ref to the sample-mean currents, corrected for the chatter mean (a logarithmic mean: the
-//     2-cycle centre decays towards zero at R c / L between jumps of u).
+//     100 ms after the move end of the first). The ramp end is found where the sample-mean
+//     current leaves the expected chatter mean of the ramp (a logarithmic mean: the 2-cycle
+//     centre decays towards zero at R c / L between jumps of u).
 //  4. F_R at t_b from a local linear fit of the hinge moment.
 //  5. Threshold S_d = d (k_t (I_ref(t_b) + d u_eff) - F_R) = FSJ + c(d)|F_R|, with a standard
-//     error from t_b, b, the chatter sweep and F_R.
+//     error from t_b, I_start, the chatter sweep and F_R. On noisy data S_d is the posterior mean
+//     over the t_b profile; when the data allow g0 = 0 (the torque only just overcame FDJ),
+//     FSJ - FDJ may be below one chatter step k_t u: the shaft then stick-slips on the current
+//     peaks before it moves, invisibly in noisy means, so the posterior also spreads uniformly
+//     over [S(g0 = 0) - k_t u, S(g0 = 0)] with the likelihood of the zero-acceleration start.
 //  6. Also the dynamic friction D_d = FDJ + c(d)|F_R| from the telescoped mean T_R over the fully
 //     slipping samples between breakaway and ramp end, when there are at least kMinSlipSamples.
 #include "core/run.hpp"
@@ -71,6 +77,8 @@ struct BreakawayEvent {
     std::optional<double> dynamic_friction_nm;         ///< D_d = FDJ + c(d)|F_R|
     double dynamic_friction_se_nm = 0;
     std::size_t slip_samples = 0;
+    double t_move_end_s = 0;            ///< when the shaft had moved kBrkMoveRad (ramp end)
+    double stick_slip_weight = 0;       ///< noisy data: posterior weight of a stick-slip start (step 5)
 };
 
 struct BreakawayAnalysis {
