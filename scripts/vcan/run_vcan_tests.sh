@@ -8,7 +8,8 @@
 # ctest's output and status into BUILD_DIR/vcan-uml/, and this script prints them and exits with
 # ctest's status.
 # Environment: EMADIAG_VCAN_TIME_SCALE (telemetry pacing for the suite, default 2),
-#              EMADIAG_UML_MEM (guest memory, default 512M), EMADIAG_UML_TIMEOUT_S (default 600).
+#              EMADIAG_UML_MEM (guest memory, default 512M), EMADIAG_UML_TIMEOUT_S (default 600),
+#              EMADIAG_VCAN_CTEST_ARGS (extra ctest arguments, e.g. -V).
 set -u
 if [ $# -ne 1 ] || [ ! -d "$1" ]; then
     echo "usage: $0 BUILD_DIR" >&2
@@ -22,7 +23,7 @@ if [ ! -f "$BUILD_DIR/CTestTestfile.cmake" ]; then
 fi
 
 run_ctest() {
-    cd "$BUILD_DIR" && ctest -L vcan --output-on-failure
+    cd "$BUILD_DIR" && ctest -L vcan --output-on-failure ${EMADIAG_VCAN_CTEST_ARGS:-}
 }
 
 host_has_vcan() {
@@ -63,7 +64,7 @@ mount -t tmpfs -o size=256m tmpfs /tmp
     done
     ip link add dev $IFACE type vcan && ip link set $IFACE up && ip -brief link show $IFACE
 } > "$WORK/guest-setup.log" 2>&1
-cd "$BUILD_DIR" && ctest -L vcan --output-on-failure > "$WORK/ctest.log" 2>&1
+cd "$BUILD_DIR" && ctest -L vcan --output-on-failure ${EMADIAG_VCAN_CTEST_ARGS:-} > "$WORK/ctest.log" 2>&1
 echo \$? > "$WORK/ctest.status"
 sync
 poweroff -f

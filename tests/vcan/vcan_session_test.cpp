@@ -325,3 +325,22 @@ TEST_F(Vcan, CansendAbortStopsTheEma) {
     const emadiag::Run from_log = read_run_candump(path("aborted.log"));
     EXPECT_EQ(from_log.meta_value("status"), std::optional<std::string>("aborted"));
 }
+
+TEST_F(Vcan, CtrlCOnRecordSendsAbortAndKeepsThePartialLog) {
+    auto ema = start_ema({"--case", "A"});
+    auto rec = start_record("brk", "ctrlc");
+    ASSERT_TRUE(ema->wait_output("streaming", std::chrono::seconds(20))) << ema->out();
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    rec->signal(SIGINT);
+    EXPECT_EQ(rec->wait(std::chrono::seconds(20)), 130) << rec->out() << rec->err();
+    EXPECT_THAT(rec->err(), HasSubstr("run aborted (Ctrl-C); partial log kept in " + path("ctrlc.log")));
+    EXPECT_EQ(ema->wait(std::chrono::seconds(10)), 0);
+    EXPECT_THAT(ema->out(), HasSubstr("aborted by the tool"));
+    const emadiag::Run run = read_run_csv_file(path("ctrlc.csv"));
+    EXPECT_EQ(run.meta_value("status"), std::optional<std::string>("aborted"));
+    EXPECT_GT(run.samples.size(), 0u);
+    EXPECT_LT(run.samples.size(), 1600u);
+    const emadiag::Run from_log = read_run_candump(path("ctrlc.log"));
+    EXPECT_EQ(from_log.meta_value("status"), std::optional<std::string>("aborted"));
+    EXPECT_EQ(from_log.samples.size(), run.samples.size());
+}
