@@ -26,6 +26,7 @@ struct TrainCliOptions {
     int max_epochs = 1000;
     int max_fail = 12;
     double goal = 1e-6;
+    std::string resample = "linear";
 };
 
 std::vector<std::string> default_outputs(const std::string& load_case) {
@@ -59,6 +60,9 @@ const bool registered = register_command(Command{
         sub.add_option("--seed", o->seed, "Seed of the split and of the initial weights")->default_val(1);
         sub.add_option("--max-epochs", o->max_epochs, "SCG epoch limit")->default_val(1000);
         sub.add_option("--max-fail", o->max_fail, "Validation failures before stopping")->default_val(12);
+        sub.add_option("--resample", o->resample, "linear (the paper) or mean (window means, for noisy runs)")
+            ->default_val("linear")
+            ->check(CLI::IsMember({"linear", "mean"}));
         sub.add_option("--goal", o->goal, "Training MSE goal, normalised [0, 1] space (the paper: 1e-6)")->default_val(1e-6);
         return [o] {
             const Dataset d = read_dataset(o->dataset);
@@ -69,6 +73,7 @@ const bool registered = register_command(Command{
             t.spec.hidden_neurons = o->neurons;
             t.spec.with_speed = o->with_speed;
             t.spec.with_load = o->with_load;
+            t.spec.resample = o->resample;
             t.spec.outputs = o->outputs.empty() ? default_outputs(t.spec.load_case) : split_list(o->outputs);
             for (const auto& name : t.spec.outputs) {
                 if (name == kParamEtaA) throw EmadiagError("--outputs: predict eta_O; eta_A follows by eq. (4)");

@@ -40,7 +40,7 @@ int NetworkSpec::input_count() const { return timesteps * (1 + (with_speed ? 1 :
 nlohmann::json NetworkSpec::to_json() const {
     return {{"case", load_case},         {"sequence", sequence},   {"timesteps", timesteps},
             {"with_speed", with_speed},  {"with_load", with_load}, {"hidden_neurons", hidden_neurons},
-            {"outputs", outputs}};
+            {"outputs", outputs},        {"resample", resample}};
 }
 
 NetworkSpec NetworkSpec::from_json(const nlohmann::json& j, const std::string& where) {
@@ -53,6 +53,7 @@ NetworkSpec NetworkSpec::from_json(const nlohmann::json& j, const std::string& w
         s.with_load = j.at("with_load").get<bool>();
         s.hidden_neurons = j.at("hidden_neurons").get<int>();
         s.outputs = j.at("outputs").get<std::vector<std::string>>();
+        s.resample = j.value("resample", std::string("linear"));
     } catch (const nlohmann::json::exception& e) {
         throw EmadiagError(where + ": " + e.what());
     }
@@ -65,6 +66,9 @@ NetworkSpec NetworkSpec::from_json(const nlohmann::json& j, const std::string& w
         throw EmadiagError(where + ": hidden_neurons " + std::to_string(s.hidden_neurons) + " is below 1");
     }
     if (s.outputs.empty()) throw EmadiagError(where + ": outputs is empty");
+    if (s.resample != "linear" && s.resample != "mean") {
+        throw EmadiagError(where + ": resample '" + s.resample + "' is not 'linear' or 'mean'");
+    }
     for (const auto& o : s.outputs) (void)health_range(o);  // throws on an unknown name
     return s;
 }
@@ -89,6 +93,26 @@ std::vector<double> resample_linear(const std::vector<double>& t, const std::vec
     return out;
 }
 
+std::vector<double> resample_mean(const std::vector<double>& t, const std::vector<double>& y, int n) {
+    std::vector<double> out = resample_linear(t, y, n);  // also checks the sizes
+    const double t0 = t.front();
+    const double h = (t.back() - t0) / static_cast<double>(n - 1);
+    std::size_t k = 0;
+    for (int i = 0; i < n; ++i) {
+        const double lo = t0 + h * (static_cast<double>(i) - 0.5);
+        const double hi = lo + h;
+        while (k < t.size() && t[k] < lo) ++k;
+        double sum = 0;
+        int count = 0;
+        for (std::size_t j = k; j < t.size() && t[j] < hi; ++j) {
+            sum += y[j];
+            ++count;
+        }
+        if (count > 0) out[static_cast<std::size_t>(i)] = sum / count;
+    }
+    return out;
+}
+
 Eigen::VectorXd network_features(const Run& run, const NetworkSpec& spec) {
     if (run.samples.size() < 2) {
         throw EmadiagError("network inputs need at least 2 samples, the run has " + std::to_string(run.samples.size()));
@@ -103,7 +127,8 @@ Eigen::VectorXd network_features(const Run& run, const NetworkSpec& spec) {
     Eigen::VectorXd x(spec.input_count());
     Eigen::Index at = 0;
     const auto put = [&](const std::vector<double>& y) {
-        for (double v : resample_linear(t, y, spec.timesteps)) x(at++) = v;
+        const auto r = spec.resample == "mean" ? resample_mean(t, y, spec.timesteps) : resample_linear(t, y, spec.timesteps);
+        for (double v : r) x(at++) = v;
     };
     put(residual_torque_nm(run));  // eq. (7)
     if (spec.with_speed) put(speed);

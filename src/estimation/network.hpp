@@ -31,6 +31,10 @@ struct NetworkSpec {
     int timesteps = 500;              ///< N: T_R resampled to N points
     bool with_speed = false;          ///< also speed resampled to N points
     bool with_load = false;           ///< also F_R = H / tau resampled to N points
+    /// "linear": the paper's linear interpolation at N points. "mean": the mean of the samples in
+    /// each point's window (width span / (N - 1)), linear where a window holds no sample; an
+    /// anti-aliasing refinement of ours for noisy runs.
+    std::string resample = "linear";
     int hidden_neurons = 50;
     std::vector<std::string> outputs; ///< kParam* names, e.g. {FDJ_Nm, eta_O}
 
@@ -42,6 +46,10 @@ struct NetworkSpec {
 /// Resamples y(t) given at times t (strictly increasing) to n points evenly spaced from t.front() to
 /// t.back(), by linear interpolation.
 [[nodiscard]] std::vector<double> resample_linear(const std::vector<double>& t, const std::vector<double>& y, int n);
+
+/// Window means of y(t) around n points evenly spaced from t.front() to t.back() (each window is
+/// one point spacing wide, centred on its point); linear interpolation where a window is empty.
+[[nodiscard]] std::vector<double> resample_mean(const std::vector<double>& t, const std::vector<double>& y, int n);
 
 /// The raw (not normalised) input vector of a run for a spec: [T_R(N), speed(N)?, F_R(N)?].
 /// Throws EmadiagError when the run has fewer than 2 samples.

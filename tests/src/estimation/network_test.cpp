@@ -87,6 +87,28 @@ TEST(NetworkTest, ResampleLinearInterpolatesAndKeepsEnds) {
     EXPECT_THAT([&] { (void)resample_linear(t, y, 1); }, ThrowsMessage<std::runtime_error>(HasSubstr("n 1 is below 2")));
 }
 
+TEST(NetworkTest, ResampleMeanAveragesEachWindow) {
+    std::vector<double> t(9), y(9);
+    for (int i = 0; i < 9; ++i) {
+        t[static_cast<std::size_t>(i)] = i;                    // 0 .. 8
+        y[static_cast<std::size_t>(i)] = i % 2 == 0 ? 1 : -1;  // alternating "noise"
+    }
+    const auto r = resample_mean(t, y, 3);  // points 0, 4, 8; windows [-2, 2), [2, 6), [6, 10)
+    ASSERT_EQ(r.size(), 3u);
+    EXPECT_DOUBLE_EQ(r[0], 1.0 / 2.0);   // samples 0, 1
+    EXPECT_DOUBLE_EQ(r[1], 0.0);         // samples 2..5
+    EXPECT_DOUBLE_EQ(r[2], 1.0 / 3.0);   // samples 6, 7, 8
+    // More points than samples: empty windows fall back to linear interpolation.
+    const auto fine = resample_mean({0.0, 1.0}, {0.0, 2.0}, 5);
+    EXPECT_DOUBLE_EQ(fine[1], 0.5);
+    NetworkSpec spec;
+    spec.outputs = {kParamFdj};
+    nlohmann::json j = spec.to_json();
+    j["resample"] = "cubic";
+    EXPECT_THAT([&] { (void)NetworkSpec::from_json(j, "spec"); },
+                ThrowsMessage<std::runtime_error>(HasSubstr("spec: resample 'cubic' is not 'linear' or 'mean'")));
+}
+
 TEST(NetworkTest, InputNormalisationMapsTrainingRangeToZeroOne) {
     Eigen::MatrixXd x(2, 3);
     x << 1, 2, 3, 5, 5, 5;
