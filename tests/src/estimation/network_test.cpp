@@ -95,7 +95,7 @@ TEST(NetworkTest, ResampleMeanAveragesEachWindow) {
     }
     const auto r = resample_mean(t, y, 3);  // points 0, 4, 8; windows [-2, 2), [2, 6), [6, 10)
     ASSERT_EQ(r.size(), 3u);
-    EXPECT_DOUBLE_EQ(r[0], 1.0 / 2.0);   // samples 0, 1
+    EXPECT_DOUBLE_EQ(r[0], 0.0);         // samples 0, 1
     EXPECT_DOUBLE_EQ(r[1], 0.0);         // samples 2..5
     EXPECT_DOUBLE_EQ(r[2], 1.0 / 3.0);   // samples 6, 7, 8
     // More points than samples: empty windows fall back to linear interpolation.
