@@ -500,13 +500,15 @@ BreakawayAnalysis analyse_breakaways(const Run& run) {
                                            std::pow(ev.load_torque_se_nm, 2));
         }
 
-        // 6. Dynamic friction over the fully slipping samples: from the first sample whose
-        // predecessor already runs at kSlipSpeedFraction of the final ramp speed (past any
+        // 6. Dynamic friction over the fully slipping samples: from the first sample two after one
+        // that already runs at kSlipSpeedFraction of the final ramp speed (past any
         // stick-slip), to the last full ramp sample but one (the telescoped mean needs w[last+1]).
-        if (e >= kb + 3 + kMinSlipSamples) {
+        if (e >= kb + 4 + kMinSlipSamples) {
             const double w_final = d * s[e - 1].speed_rad_s;
-            std::size_t first = kb + 2;
-            while (first + kMinSlipSamples + 1 < e && d * s[first - 1].speed_rad_s < kSlipSpeedFraction * w_final) ++first;
+            // The test looks at w[first - 2], which the telescoped mean does not use, so that
+            // picking the start does not select the noise of the speeds it uses.
+            std::size_t first = kb + 3;
+            while (first + kMinSlipSamples + 1 < e && d * s[first - 2].speed_rad_s < kSlipSpeedFraction * w_final) ++first;
             const std::size_t last = e - 2;
             if (last + 1 >= first + kMinSlipSamples && w_final > 0) {
                 const double cnt = static_cast<double>(last - first + 1);

@@ -69,7 +69,8 @@ HealthEstimate estimate_dyn(const Run& run) {
                      {"slip_samples", static_cast<double>(r.samples)},
                      {"condition_number", r.condition_number},
                      {"fr_spread_Nm", r.fr_spread_nm},
-                     {"residual_scale_Nm", r.residual_scale_nm}};
+                     {"residual_scale_Nm", r.residual_scale_nm},
+                     {"hac_floor_applied", r.hac_fallback ? 1.0 : 0.0}};
     return h;
 }
 

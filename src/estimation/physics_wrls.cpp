@@ -94,10 +94,12 @@ std::vector<SlipWindow> slip_windows(const Run& run) {
         if (slip[i] == 0) { ++i; continue; }
         std::size_t j = i;
         while (j + 1 < n && slip[j + 1] == slip[i]) ++j;
-        // stretch [i, j]; cut into windows of kWindowSamples, the remainder joins the last window
+        // stretch [i, j]; cut into consecutive windows of kWindowSamples (the remainder joins
+        // the last one): consecutive windows telescope, so the speed noise of a whole stretch
+        // falls as 1 / its length
         const std::size_t len = j - i + 1;
-        const std::size_t count = std::max<std::size_t>(1, len / kWindowSamples);
-        if (len >= kWindowSamples / 2) {
+        if (len >= kWindowSamples) {
+            const std::size_t count = len / kWindowSamples;
             for (std::size_t k = 0; k < count; ++k) {
                 SlipWindow w;
                 w.first = i + k * kWindowSamples;
@@ -216,8 +218,11 @@ WrlsResult fit_friction_wrls(const std::vector<SlipWindow>& windows, double tau)
     }
     update_residuals();
     res.residual_scale_nm = scale;
-    // Sandwich covariance, lag 0 and lag 1 within a segment.
+    // Sandwich covariance, heteroscedasticity and lag-1 autocorrelation consistent within a
+    // segment: consecutive windows share a boundary speed, so their residuals are
+    // e_i = u_i + v_{i+1} - v_i, and on noise-free runs the boundary errors telescope away.
     Mat2 bread, meat;
+    for (std::size_t i = 0; i < n; ++i) bread.add(wt[i], 1.0, g[i]);
     auto add_meat = [&](bool lag1) {
         meat = Mat2{};
         for (std::size_t i = 0; i < n; ++i) {
@@ -231,22 +236,26 @@ WrlsResult fit_friction_wrls(const std::vector<SlipWindow>& windows, double tau)
             }
         }
     };
-    for (std::size_t i = 0; i < n; ++i) bread.add(wt[i], 1.0, g[i]);
     const double small_sample = static_cast<double>(n) / static_cast<double>(n - static_cast<std::size_t>(p));
     auto covariance = [&] {
-        if (p == 1) return Mat2{meat.a00 / (bread.a00 * bread.a00) * small_sample, 0, 0};
-        const Mat2 bi = bread.inverse();
-        Mat2 c = bi.sandwich(meat);
-        c.a00 *= small_sample; c.a01 *= small_sample; c.a11 *= small_sample;
+        Mat2 c;
+        if (p == 1) {
+            c.a00 = meat.a00 / (bread.a00 * bread.a00) * small_sample;
+        } else {
+            c = bread.inverse().sandwich(meat);
+            c.a00 *= small_sample; c.a01 *= small_sample; c.a11 *= small_sample;
+        }
         return c;
     };
+    add_meat(false);
+    const Mat2 cov_lag0 = covariance();
     add_meat(true);
     Mat2 cov = covariance();
-    // A lag-1 term can make the estimate indefinite on short runs; fall back to lag 0 then.
-    if (cov.a00 <= 0 || (p == 2 && cov.a11 <= 0)) {
-        add_meat(false);
-        cov = covariance();
-    }
+    // The lag-1 terms are a noisy estimate: they can make a variance implausibly small (or
+    // negative on short runs). Keep each variance at least kMinHacFraction of its lag-0 value.
+    res.hac_fallback = cov.a00 < kMinHacFraction * cov_lag0.a00 || (p == 2 && cov.a11 < kMinHacFraction * cov_lag0.a11);
+    cov.a00 = std::max(cov.a00, kMinHacFraction * cov_lag0.a00);
+    cov.a11 = std::max(cov.a11, kMinHacFraction * cov_lag0.a11);
     res.fdj_se_nm = std::sqrt(std::max(0.0, cov.a00));
     const double eta_var = cov.a11;
     res.fdj_nm = fdj;

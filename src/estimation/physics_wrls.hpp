@@ -10,8 +10,9 @@
 //    falls as 1/n) and the regressors x_opp = mean |F_R| over opposing samples, x_aid over aiding
 //    ones, so that y = FDJ + c_opp(eta_O) x_opp + c_aid(eta_O) x_aid exactly (eq. 5, eq. 4).
 // 3. Gauss-Newton in (FDJ, eta_O) with Huber weights (iteratively reweighted, MAD scale).
-// 4. Standard errors: a sandwich (heteroscedasticity and lag-1 autocorrelation consistent:
-//    neighbouring windows share a boundary speed) with a small-sample factor n/(n-p).
+// 4. Standard errors: a sandwich, heteroscedasticity and lag-1 autocorrelation consistent within
+//    a segment (consecutive windows share a boundary speed: e_i = u_i + v_{i+1} - v_i), with
+//    the factor n/(n-p); each variance at least kMinHacFraction of its lag-0 value.
 // 5. Identifiability: eta is identifiable only when the condition number of the column-scaled
 //    weighted Jacobian is below kMaxConditionNumber and the |F_R| spread over the windows is at
 //    least kMinFrSpreadNm. Otherwise eta is fixed at the section-8 prior middle, and FDJ carries
@@ -35,6 +36,8 @@ inline constexpr std::size_t kMinWindows = 6;
 inline constexpr double kMaxConditionNumber = 200.0;
 inline constexpr double kMinFrSpreadNm = 0.05;
 inline constexpr double kHuberK = 1.345;
+/// Lower bound of a lag-1 (HAC) variance, as a fraction of the lag-0 variance.
+inline constexpr double kMinHacFraction = 0.1;
 inline constexpr int kMaxIterations = 30;
 
 struct SlipWindow {
@@ -57,6 +60,7 @@ struct WrlsResult {
     double condition_number = 0;
     double fr_spread_nm = 0;
     double residual_scale_nm = 0;            ///< robust (MAD) scale of the window residuals
+    bool hac_fallback = false;               ///< a lag-1 variance was raised to kMinHacFraction of lag 0
     std::size_t windows = 0, samples = 0;
     std::string why_not_identifiable;        ///< empty when identifiable
 };
