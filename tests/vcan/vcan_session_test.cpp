@@ -169,8 +169,8 @@ public:
     return ::testing::AssertionSuccess();
 }
 
-void check_session(Vcan& t, const std::string& seq, sim::Sequence sseq, const std::string& stem) {
-    auto ema = t.start_ema({"--case", "B", "--noise", "typical", "--seed", "31"}, "ema");
+void check_session(Vcan& t, const std::string& seq, sim::Sequence sseq, const std::string& stem, const std::string& noise) {
+    auto ema = t.start_ema({"--case", "B", "--noise", noise, "--seed", "31"}, "ema");
     auto rec = t.start_record(seq, stem, {});
     const int rc = rec->wait(std::chrono::seconds(60));
     std::cout << rec->out();
@@ -185,7 +185,7 @@ void check_session(Vcan& t, const std::string& seq, sim::Sequence sseq, const st
     EXPECT_EQ(run.constants.k_t_nm_per_a, static_cast<double>(0.2f));
     sim::SimConfig direct;
     direct.load_case = sim::LoadCase::B;
-    direct.noise = sim::NoiseProfile::Typical;
+    direct.noise = sim::parse_noise(noise);
     direct.seed = 31;
     direct.sequence = sseq;
     EXPECT_TRUE(matches_simulation(run, sim::simulate(direct)));
@@ -194,11 +194,11 @@ void check_session(Vcan& t, const std::string& seq, sim::Sequence sseq, const st
 }  // namespace
 
 TEST_F(Vcan, DynOverVcanMatchesDirectSimulation) {
-    check_session(*this, "dyn", sim::Sequence::Dyn, "dyn");
+    check_session(*this, "dyn", sim::Sequence::Dyn, "dyn", "typical");  // noise already quantised: exact
 }
 
 TEST_F(Vcan, BrkOverVcanMatchesDirectSimulation) {
-    check_session(*this, "brk", sim::Sequence::Brk, "brk");
+    check_session(*this, "brk", sim::Sequence::Brk, "brk", "none");  // unquantised: within half a step
 }
 
 TEST_F(Vcan, NoEmaIsAClearError) {
