@@ -153,6 +153,17 @@ HealthEstimate NetworkModel::estimate(const Run& run) const {
         }
         h.parameters.push_back(std::move(p));
     }
+    // A model's uncertainty is calibrated for the noise of its training runs; say so when the run's
+    // declared noise profile differs (real runs declare none and get no note).
+    const auto run_noise = run.meta_value("noise");
+    if (run_noise && training.contains("noise") && training.at("noise").is_string() &&
+        training.at("noise").get<std::string>() != *run_noise) {
+        const std::string warn = "model trained on noise " + training.at("noise").get<std::string>() +
+                                 ", the run declares noise " + *run_noise + ": the uncertainty may be understated";
+        for (auto& p : h.parameters) {
+            if (p.value) p.note = p.note.empty() ? warn : p.note + "; " + warn;
+        }
+    }
     h.diagnostics.emplace_back("timesteps", spec.timesteps);
     h.diagnostics.emplace_back("hidden_neurons", spec.hidden_neurons);
     return h;

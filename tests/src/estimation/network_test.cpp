@@ -140,6 +140,7 @@ TEST(NetworkTest, FeaturesHaveTimestepsPerSignal) {
 struct ShippedModel {
     const char* file;
     sim::LoadCase load_case;
+    sim::NoiseProfile noise;
 };
 
 std::string model_path(const char* file) { return std::string(EMADIAG_SOURCE_DIR) + "/models/" + file; }
@@ -157,8 +158,11 @@ TEST_P(ShippedModelTest, LoadsAndPredictsASimulatedRunWithinItsUncertainty) {
     c.params.fsj_nm = 0.131;
     c.params.eta_o = 0.87;
     c.params.eta_a = sim::eta_a_from_eta_o(c.params.eta_o, c.params.tau);
+    c.noise = m.noise;
+    c.seed = 77;
     const emadiag::Run run = make_run(c, sim::simulate(c));
     const HealthEstimate h = model.estimate(run);
+    EXPECT_THAT(h.find(kParamFdj)->note, ::testing::Not(HasSubstr("understated")));
     EXPECT_EQ(h.estimator, "network");
     ASSERT_EQ(h.parameters.size(), 4u);
     // Within 4 calibrated standard errors (a 95 % interval is 1.96).
@@ -187,9 +191,21 @@ TEST_P(ShippedModelTest, LoadsAndPredictsASimulatedRunWithinItsUncertainty) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Models, ShippedModelTest,
-                         ::testing::Values(ShippedModel{"case_a.json", sim::LoadCase::A},
-                                           ShippedModel{"case_a_ext.json", sim::LoadCase::AExt},
-                                           ShippedModel{"case_b.json", sim::LoadCase::B}));
+                         ::testing::Values(ShippedModel{"case_a.json", sim::LoadCase::A, sim::NoiseProfile::None},
+                                           ShippedModel{"case_a_ext.json", sim::LoadCase::AExt, sim::NoiseProfile::None},
+                                           ShippedModel{"case_b.json", sim::LoadCase::B, sim::NoiseProfile::None},
+                                           ShippedModel{"case_a_typical.json", sim::LoadCase::A, sim::NoiseProfile::Typical},
+                                           ShippedModel{"case_a_ext_typical.json", sim::LoadCase::AExt,
+                                                        sim::NoiseProfile::Typical},
+                                           ShippedModel{"case_b_typical.json", sim::LoadCase::B, sim::NoiseProfile::Typical}));
+
+TEST(NetworkModelTest, NotesANoiseMismatch) {
+    const NetworkModel model = NetworkModel::load(model_path("case_b.json"));
+    sim::SimConfig c;
+    c.noise = sim::NoiseProfile::Typical;
+    const HealthEstimate h = model.estimate(make_run(c, sim::simulate(c)));
+    EXPECT_THAT(h.find(kParamFdj)->note, HasSubstr("model trained on noise none, the run declares noise typical"));
+}
 
 TEST(NetworkModelTest, RejectsARunOfAnotherCase) {
     const NetworkModel model = NetworkModel::load(model_path("case_b.json"));
