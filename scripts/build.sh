@@ -5,7 +5,7 @@ cd "$(dirname "$0")/.."
 config=${1:-release}
 case "$config" in
   release) dir=build; flags=(-DCMAKE_BUILD_TYPE=Release) ;;
-  asan)    dir=build-asan; flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DEMADIAG_SANITIZE=ON -DEMADIAG_BUILD_BENCH=OFF) ;;
+  asan)    dir=build-asan; flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DEMADIAG_SANITIZE=ON -DEMADIAG_NATIVE=OFF -DEMADIAG_BUILD_BENCH=OFF) ;;
   *) echo "build: unknown configuration '$config' (release or asan)" >&2; exit 2 ;;
 esac
 cmake -S . -B "$dir" -G Ninja "${flags[@]}" >/dev/null

@@ -105,3 +105,19 @@ TEST(EmaParams, JsonRoundTrip) {
 
 }  // namespace
 }  // namespace emadiag::sim
+
+namespace emadiag::sim {
+namespace {
+
+TEST(EmaParams, ShippedDatasheetFileEqualsTheBuiltInDatasheet) {
+    const auto p = EmaParams::from_json_file(std::string(EMADIAG_SOURCE_DIR) + "/sim_backend/params/ema-ref-1.json");
+    EXPECT_EQ(p.to_json(), EmaParams::datasheet().to_json());
+}
+
+TEST(EmaParams, ParameterFileErrorsNameTheFile) {
+    EXPECT_THAT([] { (void)EmaParams::from_json_file("/nonexistent/p.json"); },
+                ThrowsMessage<SimError>(HasSubstr("cannot open parameter file /nonexistent/p.json")));
+}
+
+}  // namespace
+}  // namespace emadiag::sim

@@ -25,11 +25,11 @@ Run simulated_run() {
 }
 
 TEST(RunCsv, WriteThenReadGivesBackTheSameData) {
-    Run run = simulated_run();
+    emadiag::Run run = simulated_run();
     run.extra_columns.emplace_back("extra_col", std::vector<double>(run.samples.size(), 1.0 / 3.0));
     std::stringstream ss;
     write_run_csv(ss, run);
-    const Run back = read_run_csv(ss, "mem.csv");
+    const emadiag::Run back = read_run_csv(ss, "mem.csv");
     ASSERT_EQ(back.samples.size(), run.samples.size());
     for (std::size_t i = 0; i < run.samples.size(); ++i) {
         const auto& a = run.samples[i];
@@ -53,7 +53,7 @@ TEST(RunCsv, WriteThenReadGivesBackTheSameData) {
 }
 
 TEST(RunCsv, HeaderCarriesTruthAndEffectsForSimulatedRuns) {
-    const Run run = simulated_run();
+    const emadiag::Run run = simulated_run();
     EXPECT_EQ(run.meta_value("true_FDJ_Nm").value(), "0.080000000000000002");
     EXPECT_TRUE(run.meta_value("effect_viscous").has_value());
     for (const auto& [k, v] : run.analysis_meta()) {
