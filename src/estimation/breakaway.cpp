@@ -219,20 +219,6 @@ double move_end_from_current(const Run& run, std::size_t e, double ramp_mean_cur
     return x.t_s - period + f * period;
 }
 
-/// Expected sample-mean current of the chatter around a demand I_ref that ramps at `ramp_a_s`
-/// (away from zero) or holds (0): the 2-cycle centre c decays towards zero at R c / L and jumps
-/// by u when it leaves the band I_ref +/- u/2, so the time average over the band is a
-/// logarithmic mean (with the ramp, of the band shifted by ramp L / R). Zero inside +/- u/2.
-double chatter_mean_current_a(double i_ref_a, double ramp_a_s) {
-    const double mag = std::abs(i_ref_a);
-    const double u = (kDriveSupplyV - kStatorResistanceOhm * mag) * kCurrentLoopStepS / kStatorInductanceH;
-    if (mag <= 0.5 * u) return 0.0;
-    const double shift = std::abs(ramp_a_s) * kStatorInductanceH / kStatorResistanceOhm;
-    const double lo = mag - 0.5 * u + shift, hi = mag + 0.5 * u + shift;
-    const double logmean = (hi - lo) / std::log(hi / lo);
-    return (i_ref_a > 0 ? 1.0 : -1.0) * (logmean - shift);
-}
-
 /// Clean data: when the angle first moved kBrkMoveRad from theta_start in direction d, between
 /// samples k-1 and k, using the exact period-mean speed and a linear speed inside the period.
 std::optional<double> move_end_time(const Run& run, std::size_t from, double theta_start, int d) {
@@ -305,6 +291,16 @@ std::size_t first_sample_starting_at(const Run& run, double t_s, std::size_t fro
 }
 
 }  // namespace
+
+double chatter_mean_current_a(double i_ref_a, double ramp_a_s) {
+    const double mag = std::abs(i_ref_a);
+    const double u = (kDriveSupplyV - kStatorResistanceOhm * mag) * kCurrentLoopStepS / kStatorInductanceH;
+    if (mag <= 0.5 * u) return 0.0;
+    const double shift = std::abs(ramp_a_s) * kStatorInductanceH / kStatorResistanceOhm;
+    const double lo = mag - 0.5 * u + shift, hi = mag + 0.5 * u + shift;
+    const double logmean = (hi - lo) / std::log(hi / lo);
+    return (i_ref_a > 0 ? 1.0 : -1.0) * (logmean - shift);
+}
 
 BreakawayAnalysis analyse_breakaways(const Run& run) {
     BreakawayAnalysis out;

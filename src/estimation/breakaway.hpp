@@ -88,6 +88,12 @@ struct BreakawayAnalysis {
     std::vector<std::string> problems;   ///< why an event was not found
 };
 
+/// Expected sample-mean current of the bang-bang chatter around a demand I_ref that ramps at
+/// `ramp_a_s` (away from zero) or holds (0): the 2-cycle centre c decays towards zero at R c / L
+/// and jumps by u when it leaves the band I_ref +/- u/2, so the time average over the band is a
+/// logarithmic mean (with the ramp, of the band shifted by ramp L / R). Zero inside +/- u/2.
+[[nodiscard]] double chatter_mean_current_a(double i_ref_a, double ramp_a_s);
+
 /// Finds and measures the breakaway events of a BRK run. Throws EmadiagError when the run is too
 /// short to hold the first position hold.
 [[nodiscard]] BreakawayAnalysis analyse_breakaways(const Run& run);
