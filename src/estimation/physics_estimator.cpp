@@ -124,6 +124,8 @@ HealthEstimate estimate_brk(const Run& run) {
         h.diagnostics.emplace_back(p + "threshold_Nm", ev.threshold_nm);
         h.diagnostics.emplace_back(p + "load_torque_Nm", ev.load_torque_nm);
         h.diagnostics.emplace_back(p + "slip_accel_torque_Nm", ev.slip_accel_torque_nm);
+        h.diagnostics.emplace_back(p + "move_end_s", ev.t_move_end_s);
+        h.diagnostics.emplace_back(p + "stick_slip_weight", ev.stick_slip_weight);
     }
     return h;
 }
