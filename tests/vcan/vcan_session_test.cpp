@@ -4,6 +4,7 @@
 // without loss; 1 is real time).
 #include "can_tool/candump_run.hpp"
 #include "core/run_csv.hpp"
+#include "emadiag/can/can_error.hpp"
 #include "emadiag/can/ema_icd.hpp"
 #include "emadiag/can/socketcan_bus.hpp"
 #include "emadiag/sim/simulator.hpp"
@@ -343,4 +344,59 @@ TEST_F(Vcan, CtrlCOnRecordSendsAbortAndKeepsThePartialLog) {
     const emadiag::Run from_log = read_run_candump(path("ctrlc.log"));
     EXPECT_EQ(from_log.meta_value("status"), std::optional<std::string>("aborted"));
     EXPECT_EQ(from_log.samples.size(), run.samples.size());
+}
+
+TEST_F(Vcan, SocketCanFiltersFdFramesTimestampsTimeoutAndErrorFrames) {
+    can::SocketCanBus rx(iface());
+    can::SocketCanBus tx(iface());
+    EXPECT_GE(rx.receive_buffer_bytes(), std::size_t{1} << 20) << "large receive buffer";
+    // Timeout: nothing on the bus.
+    const auto t0 = Clock::now();
+    auto r = rx.receive(std::chrono::milliseconds(50));
+    EXPECT_EQ(r.status, can::ReceiveStatus::Timeout);
+    EXPECT_GE(Clock::now() - t0, std::chrono::milliseconds(45));
+    // Filters: only 0x100..0x101 pass.
+    rx.set_filters({can::CanFilter{0x100, 0x7FE, false}});
+    can::CanFrame f;
+    f.len = 2;
+    for (std::uint32_t id : {0x0FFu, 0x100u, 0x102u, 0x101u}) {
+        f.id = id;
+        ASSERT_EQ(tx.send(f), can::SendStatus::Sent);
+    }
+    r = rx.receive(std::chrono::milliseconds(500));
+    ASSERT_TRUE(r.has_frame());
+    EXPECT_EQ(r.frame.id, 0x100u);
+    const auto now_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch());
+    EXPECT_LT(std::chrono::abs(now_ns - r.frame.timestamp), std::chrono::seconds(5)) << "kernel timestamp";
+    r = rx.receive(std::chrono::milliseconds(500));
+    ASSERT_TRUE(r.has_frame());
+    EXPECT_EQ(r.frame.id, 0x101u);
+    // CAN FD: 64 bytes, extended id, BRS.
+    rx.set_filters({});
+    can::CanFrame fd;
+    fd.fd = true;
+    fd.brs = true;
+    fd.extended = true;
+    fd.id = 0x1ABCDE0;
+    fd.len = 64;
+    for (std::size_t i = 0; i < 64; ++i) fd.data[i] = static_cast<std::uint8_t>(i);
+    ASSERT_EQ(tx.send(fd), can::SendStatus::Sent);
+    r = rx.receive(std::chrono::milliseconds(500));
+    ASSERT_TRUE(r.has_frame());
+    EXPECT_TRUE(r.frame.fd && r.frame.brs && r.frame.extended);
+    EXPECT_EQ(r.frame.id, 0x1ABCDE0u);
+    EXPECT_EQ(r.frame.len, 64);
+    EXPECT_EQ(r.frame.data, fd.data);
+    // Error frames as a controller reports them (injected with cansend: CAN_ERR_FLAG in the id).
+    Process crtl({"cansend", iface(), "20000004#0004000000000000"}, path("err1.out"));  // controller: rx error passive
+    ASSERT_EQ(crtl.wait(std::chrono::seconds(5)), 0) << crtl.err();
+    r = rx.receive(std::chrono::milliseconds(500));
+    EXPECT_EQ(r.status, can::ReceiveStatus::ErrorFrame) << can::to_string(r.status);
+    EXPECT_THAT(r.detail, HasSubstr("controller problem"));
+    Process busoff({"cansend", iface(), "20000040#0000000000000000"}, path("err2.out"));
+    ASSERT_EQ(busoff.wait(std::chrono::seconds(5)), 0) << busoff.err();
+    r = rx.receive(std::chrono::milliseconds(500));
+    EXPECT_EQ(r.status, can::ReceiveStatus::BusOff) << can::to_string(r.status);
+    EXPECT_THAT(r.detail, HasSubstr("bus-off"));
+    EXPECT_THAT([] { can::SocketCanBus nope("nosuchcan9"); }, ::testing::ThrowsMessage<can::CanError>(HasSubstr("socketcan:nosuchcan9: no such CAN interface")));
 }
