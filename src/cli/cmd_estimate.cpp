@@ -20,6 +20,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -74,8 +75,11 @@ struct Outcome {
 };
 
 #ifdef EMADIAG_HAVE_NETWORK
-/// A shipped model for the run's case and sequence, if any.
+/// A shipped model for the run's case and sequence, if any. Among several, the one trained on the
+/// run's noise profile (its `noise` header, which simulated runs carry), else on `typical` noise:
+/// measured runs are never noise-free, and a model trained without noise is over-confident on them.
 std::optional<std::string> shipped_model_for(const Run& run, std::vector<std::string>& notes) {
+    const std::string wanted_noise = run.meta_value("noise").value_or("typical");
     for (const auto& dir : model_dirs()) {
         std::error_code ec;
         if (!std::filesystem::is_directory(dir, ec)) continue;
@@ -84,15 +88,18 @@ std::optional<std::string> shipped_model_for(const Run& run, std::vector<std::st
             if (entry.path().extension() == ".json") files.push_back(entry.path());
         }
         std::sort(files.begin(), files.end());
+        std::optional<std::string> first_match;
         for (const auto& f : files) {
             try {
                 const NetworkModel m = NetworkModel::load(f.string());
-                if (m.spec.load_case == run.load_case && m.spec.sequence == run.sequence) return f.string();
+                if (m.spec.load_case != run.load_case || m.spec.sequence != run.sequence) continue;
+                if (!first_match) first_match = f.string();
+                if (m.training.is_object() && m.training.value("noise", std::string{}) == wanted_noise) return f.string();
             } catch (const std::exception& e) {
                 notes.push_back("skipped " + f.string() + ": " + e.what());
             }
         }
-        return std::nullopt;  // the first models/ directory found is the one that counts
+        return first_match;  // the first models/ directory found is the one that counts
     }
     return std::nullopt;
 }
