@@ -14,6 +14,13 @@ std::string num(double v) {
     return buf;
 }
 
+/// Percentages in messages: 4 significant digits.
+std::string pct(double fraction) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.4g", fraction * 100.0);
+    return buf;
+}
+
 constexpr std::size_t kMaxSamples = 65536;  // 16-bit sample index
 
 }  // namespace
@@ -129,7 +136,7 @@ Run SessionDecoder::build_run(const std::string& source) const {
     std::string invalid;
     if (st.samples_expected == 0) invalid = "no telemetry";
     else if (loss > kMaxLossFraction)
-        invalid = "telemetry loss " + num(loss * 100) + " % above " + num(kMaxLossFraction * 100) + " % (" + std::to_string(st.frames_lost) +
+        invalid = "telemetry loss " + pct(loss) + " % above " + pct(kMaxLossFraction) + " % (" + std::to_string(st.frames_lost) +
                   " frames lost, " + std::to_string(st.crc_failures) + " CRC failures of " + std::to_string(st.frames_expected) + ")";
     else if (status != "complete") invalid = "sequence " + status;
     if (invalid.empty() && last_status_ && last_status_->fault != can::icd::FaultCode::None)
