@@ -10,6 +10,7 @@ Run read_run_candump(const std::string& path) {
     can_tool::SessionDecoder decoder;
     for (const auto& r : records) decoder.feed(r.frame);
     Run run = decoder.build_run(path);
+    run.set_meta("source", "candump log");
     run.set_meta("log_file", path);
     return run;
 }

@@ -107,7 +107,6 @@ RecordOutcome Recorder::record(const std::atomic<bool>& interrupt) {
                    ", MaintenanceEnable=" + icd.value_name(icd.status, "MaintenanceEnable", s->maintenance_enable) + ")";
         fail("the EMA on " + bus_.spec() + " refused ENTER_GROUND_TEST: " + why);
     }
-    in_session_ = true;
 
     // 3. Start the sequence.
     send_command(Command::StartSequence);

@@ -58,7 +58,6 @@ private:
     SessionDecoder decoder_;
     Clock::time_point next_heartbeat_;
     std::uint8_t heartbeat_counter_ = 0;
-    bool in_session_ = false;
     std::uint64_t ema_frames_ = 0;
     Clock::time_point last_ema_frame_;
     std::optional<can::CommandAck> last_ack_;

@@ -134,7 +134,8 @@ TEST(EmaNode, HeartbeatLossAbortsAfter100ms) {
     EXPECT_EQ(aborted->fault, icd::FaultCode::HeartbeatLost);
     EXPECT_EQ(aborted->session_id, 9);
     EXPECT_GE(after_ms, 100.0);
-    EXPECT_LT(after_ms, 100.0 + 50.0) << "the watchdog reacts within a few loop periods of its 100 ms deadline";
+    EXPECT_LT(after_ms, 100.0 + 100.0) << "the watchdog reacts within a few loop periods of its 100 ms deadline"
+                                        " (tight bound: tests/vcan HeartbeatStopsThenEmaAbortsWithin100ms)";
 }
 
 TEST(EmaNode, AbortStopsTheTelemetry) {
