@@ -24,6 +24,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
@@ -52,6 +53,20 @@ Run read_run_any(const std::string& path) {
         throw EmadiagError(path + ": unknown run format; expected RUN.csv (run CSV) or RUN.log (candump)");
     }
     return read_run_csv_file(path);
+}
+
+/// The file line of the first data row of a run CSV (after the `# key=value` lines and the header).
+std::optional<int> first_data_line(const std::string& path) {
+    if (!ends_with(path, ".csv")) return std::nullopt;
+    std::ifstream in(path);
+    std::string line;
+    int n = 0;
+    while (std::getline(in, line)) {
+        ++n;
+        if (!line.empty() && line[0] == '#') continue;
+        return n + 1;  // this is the header row
+    }
+    return std::nullopt;
 }
 
 /// Where shipped models are looked for: $EMADIAG_MODELS_DIR, ./models, <exe>/../models, <exe>/../../models.
@@ -195,7 +210,19 @@ const bool registered = register_command(Command{
         sub.add_flag("--json", *json, "Print the stable JSON schema of docs/estimate-json.md");
         return [path, model, json] {
             const Run run = read_run_any(*path);
-            check_run(run);
+            try {
+                check_run(run);
+            } catch (const EmadiagError& e) {
+                // Rows are numbered in sample order; say where they are in a CSV file.
+                const auto line = first_data_line(*path);
+                if (!line) throw;
+                std::string msg = e.what();
+                const std::string prefix = "[emadiag] ";
+                if (msg.rfind(prefix, 0) == 0) msg.erase(0, prefix.size());
+                throw EmadiagError(msg + "\n  (" + *path + ": sample row 1 is line " +
+                                         std::to_string(*line) + ", so sample row N is line N + " +
+                                         std::to_string(*line - 1) + ")");
+            }
             Outcome out;
             out.estimates.push_back(estimate_physics(run));
 #ifdef EMADIAG_HAVE_NETWORK

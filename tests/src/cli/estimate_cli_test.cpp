@@ -182,6 +182,14 @@ TEST_F(EstimateCli, TooFewSlippingSamplesIsAClearError) {
     EXPECT_THAT(r.output, HasSubstr("too few slipping samples"));
 }
 
+TEST_F(EstimateCli, ACandumpLogWithoutASessionIsAClearError) {
+    { std::ofstream(path("empty.log")) << "(0.000000) vcan0 123#00\n"; }
+    const Result r = run("estimate " + path("empty.log"));
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_THAT(r.output, HasSubstr("emadiag: error:"));
+    EXPECT_THAT(r.output, HasSubstr("empty.log"));
+}
+
 TEST_F(EstimateCli, UnknownFormatsAndMissingFilesAreClearErrors) {
     const Result r = run("estimate " + path("run.txt"));
     EXPECT_EQ(r.exit_code, 1);
