@@ -137,8 +137,8 @@ TEST_F(EstimateCli, ANanIsAClearErrorNamingTheRow) {
     const Result r = run("estimate " + file);
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_THAT(r.output, HasSubstr("emadiag: error:"));
-    EXPECT_THAT(r.output, HasSubstr("12"));
-    EXPECT_THAT(r.output, HasSubstr("current_A"));
+    EXPECT_THAT(r.output, HasSubstr("sample row 12 (t_s=0.006): current_A is nan"));
+    EXPECT_THAT(r.output, HasSubstr("nan.csv: sample row 1 is line 15"));
 }
 
 TEST_F(EstimateCli, TimeGoingBackwardsIsAClearError) {
