@@ -15,7 +15,6 @@ namespace {
 
 constexpr double kNoiseWindowStartS = 0.005;  // skip the start-up of the first hold
 constexpr double kTimeEpsS = 1e-9;
-constexpr double kInitialRampFitS = 0.01;     // stuck for sure: the first 10 ms of a ramp
 constexpr double kGridStepFraction = 0.02;    // trajectory grid step, fraction of a period
 constexpr double kCleanSigmaSpeedRadS = 1e-9; // weights for the exact (noise-free) fit
 constexpr double kCleanSigmaThetaRad = 1e-12;

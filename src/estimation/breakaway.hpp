@@ -4,8 +4,8 @@
 // In direction d the shaft breaks away when d (k_t I - F_R) = FSJ + c(d) |F_R|, with I the
 // INSTANTANEOUS current. The bang-bang current loop chatters around the ramp demand I_ref: after
 // each up-step of u = (V_dc - R |I|) dt / L (0.108 A) the current peaks above I_ref, and the
-// peaks sweep the band (I_ref, I_ref + u] every u L / (R |I| dt) steps, during which I_ref rises
-// by r = ramp_rate u L / (R |I|). So the shaft breaks away when I_ref + u - r/2 (+/- r/2, uniform)
+// peaks sweep the band (I_ref, I_ref + u] every u L / (R (|I| + ramp_rate L / R) dt) steps, during
+// which I_ref rises by r = ramp_rate u L / (R |I| + ramp_rate L). So the shaft breaks away when I_ref + u - r/2 (+/- r/2, uniform)
 // reaches the threshold, while the SAMPLE-MEAN current still tracks I_ref (section 5 note).
 //
 // Steps, per direction:
@@ -27,13 +27,17 @@
 //     centre decays towards zero at R c / L between jumps of u).
 //  4. F_R at t_b from a local linear fit of the hinge moment.
 //  5. Threshold S_d = d (k_t (I_ref(t_b) + d u_eff) - F_R) = FSJ + c(d)|F_R|, with a standard
-//     error from t_b, I_start, the chatter sweep and F_R. On noisy data S_d is the posterior mean
-//     over the t_b profile; when the data allow g0 = 0 (the torque only just overcame FDJ),
+//     error from t_b, I_start, the chatter sweep and F_R. On noisy data S_d is the maximum-
+//     likelihood value (best t_b) and its standard error the posterior spread about it over the
+//     t_b profile (flat prior in S); when the data allow g0 = 0 (the torque only just overcame FDJ),
 //     FSJ - FDJ may be below one chatter step k_t u: the shaft then stick-slips on the current
 //     peaks before it moves, invisibly in noisy means, so the posterior also spreads uniformly
 //     over [S(g0 = 0) - k_t u, S(g0 = 0)] with the likelihood of the zero-acceleration start.
 //  6. Also the dynamic friction D_d = FDJ + c(d)|F_R| from the telescoped mean T_R over the fully
-//     slipping samples between breakaway and ramp end, when there are at least kMinSlipSamples.
+//     slipping samples (from two samples after one at 30 % of the final ramp speed, past any
+//     stick-slip, to the ramp end), when there are at least kMinSlipSamples; on clean data its
+//     se includes the chatter beat's wander of the mean current (it bends the speed between the
+//     period means that stand for the window's end speeds).
 #include "core/run.hpp"
 
 #include <optional>
