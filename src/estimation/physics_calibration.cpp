@@ -19,6 +19,7 @@ namespace {
 constexpr double kNinetyFive = 1.959963984540054;
 constexpr std::uint64_t kNoiseSeedStride = 1000003;
 constexpr double kCaseAHingeNm = 5.0;  // ema-reference.md section 4
+constexpr double kOnePercent = 0.01, kThreePercent = 0.03;
 }  // namespace
 
 const ParameterScore& CalibrationResult::score(const std::string& name) const {
@@ -75,6 +76,8 @@ CalibrationResult evaluate_physics(const CalibrationSpec& spec) {
             s.mse_normalised += std::pow(err / (range.hi - range.lo), 2);
             s.max_rel_error = std::max(s.max_rel_error, std::abs(err) / std::abs(truth));
             s.mean_rel_error += std::abs(err) / std::abs(truth);
+            s.within_1pct += std::abs(err) <= kOnePercent * std::abs(truth) ? 1 : 0;
+            s.within_3pct += std::abs(err) <= kThreePercent * std::abs(truth) ? 1 : 0;
             s.mean_z2 += p.std_error > 0 ? std::pow(err / p.std_error, 2) : (err == 0 ? 0.0 : INFINITY);
         }
     }
@@ -106,7 +109,7 @@ std::string format_calibration(const CalibrationResult& r) {
         os << std::setprecision(4) << " coverage " << std::setw(6) << 100.0 * s.coverage() << " %  (" << s.covered << "/"
            << s.estimated << ")  normalised MSE " << std::setw(10) << s.mse_normalised << "  rel. error mean "
            << std::setw(9) << 100.0 * s.mean_rel_error << " % max " << std::setw(9) << 100.0 * s.max_rel_error
-           << " %  mean (err/se)^2 " << s.mean_z2;
+           << " %  within 1 %/3 %: " << s.within_1pct << "/" << s.within_3pct << "  mean (err/se)^2 " << s.mean_z2;
         if (s.not_estimated) os << "  (not identifiable in " << s.not_estimated << ")";
         os << '\n';
     }

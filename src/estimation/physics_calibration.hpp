@@ -32,6 +32,8 @@ struct ParameterScore {
     double max_rel_error = 0;    ///< max |error| / truth
     double mean_rel_error = 0;
     double mean_z2 = 0;          ///< mean of (error / se)^2 (1 when se is right on average)
+    int within_1pct = 0;         ///< runs with |error| / truth <= 1 %
+    int within_3pct = 0;         ///< runs with |error| / truth <= 3 %
     [[nodiscard]] double coverage() const { return estimated ? static_cast<double>(covered) / estimated : 0.0; }
 };
 
