@@ -176,8 +176,13 @@ inline void step(const Shared& shared, Lanes<W>& z, long n) {
     // 3. Motor: bang-bang voltage, R-L with BEMF (paper section 2.2).
     const D i0 = z.i;
     const D w0 = z.w;
-    const D v = s.v_dc * vsgn(i_ref - i0);
-    const D i1 = i0 + s.dt_over_l * (v - s.k_t * w0 - s.r * i0);
+    // I += dt (V - k_t w - R I) / L with V = V_dc sgn(I_ref - I), arranged so that only one addition
+    // follows the sign decision (the step's critical path).
+    const D i_err = i_ref - i0;
+    const D v = sel(i_err > 0.0, zero + s.v_dc, sel(i_err < 0.0, zero - s.v_dc, zero));
+    const D i_base = i0 - s.dt_over_l * (s.k_t * w0 + s.r * i0);
+    const D di_v = sel(i_err > 0.0, zero + s.dt_over_l * s.v_dc, sel(i_err < 0.0, zero - s.dt_over_l * s.v_dc, zero));
+    const D i1 = i_base + di_v;
     z.i = i1;
     D t_m = vclamp(s.k_t * i1, -s.t_max, s.t_max);
 
@@ -228,10 +233,14 @@ inline void step(const Shared& shared, Lanes<W>& z, long n) {
         stat = sel(in_gap, zero, stat);
     }
     const M stuck = vnot(moving) & (vabs(t_act) <= stat);
-    const D t_f = sel(stuck, t_act, d * dyn + viscous);
-    const D w_free = w0 + (t_act - t_f) * s.dt_inv_j;
+    const D t_slip = d * dyn + viscous;  // friction while slipping (or breaking away)
+    const D t_f = sel(stuck, t_act, t_slip);
+    // w + dt (T_act - T_F) / J while slipping, arranged so T_act enters last (critical path).
+    const D w_free = (w0 - t_slip * s.dt_inv_j) + t_act * s.dt_inv_j;
+    // A moving shaft whose speed would change sign stops instead (max/min with 0 keep it one op deep).
     const M reversal_stop = moving & (w_free * w0 < 0.0);
-    D w1 = sel(stuck | reversal_stop, zero, w_free);
+    const D w_slip = sel(w0 > 0.0, sel(w_free < 0.0, zero, w_free), sel(w_free > 0.0, zero, w_free));
+    D w1 = sel(moving, w_slip, sel(stuck, zero, w_free));
 
     // 6. Position and end stops.
     D th1 = z.th + dt * w1;
