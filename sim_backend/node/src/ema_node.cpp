@@ -4,6 +4,11 @@
 #include "emadiag/can/can_error.hpp"
 
 #include <cmath>
+#ifdef __linux__
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+#endif
 #include <future>
 #include <thread>
 #include <sstream>
@@ -39,6 +44,14 @@ std::string ms_text(std::chrono::steady_clock::duration d) {
     s.precision(1);
     s << std::fixed << std::chrono::duration<double, std::milli>(d).count() << " ms";
     return s.str();
+}
+
+/// Background work yields the CPU to the bus loop (matters on a single CPU, e.g. user-mode Linux).
+void lower_this_thread_priority() {
+#ifdef __linux__
+    constexpr int kLowestNice = 19;
+    (void)::setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), kLowestNice);
+#endif
 }
 
 }  // namespace
@@ -224,7 +237,10 @@ void EmaNode::start_sequence(const can::ToolCommand& c, Clock::time_point) {
     status_.samples_sent = 0;
     status_.fault = FaultCode::None;
     run_ = std::make_shared<Running>();
-    run_->simulation = std::async(std::launch::async, [cfg] { return sim::simulate(cfg); });
+    run_->simulation = std::async(std::launch::async, [cfg] {
+        lower_this_thread_priority();  // the bus loop (status, watchdog, pacing) must never wait for it
+        return sim::simulate(cfg);
+    });
     ++stats_.sequences_started;
     event("START_SEQUENCE " + sim::to_string(cfg.sequence) + " session " + std::to_string(c.session_id) + ": simulating");
     send_status();
