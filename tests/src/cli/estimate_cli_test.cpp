@@ -20,7 +20,11 @@ namespace {
 using ::testing::HasSubstr;
 using ::testing::Not;
 
+#ifdef EMADIAG_CLI
+const std::string kExe = EMADIAG_CLI;
+#else
 const std::string kExe = std::string(EMADIAG_BINARY_DIR) + "/src/emadiag";
+#endif
 
 struct Result {
     int exit_code = -1;
