@@ -1,0 +1,83 @@
+#pragma once
+// A thin RAII layer over the SQLite C API (after SQLiteCpp): Database, Statement, Transaction.
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+
+struct sqlite3;
+struct sqlite3_stmt;
+
+namespace emadiag::db {
+
+class Database;
+
+/// A prepared statement. Bind indexes start at 1, column indexes at 0.
+class Statement {
+public:
+    Statement(Database& db, std::string_view sql);
+    ~Statement();
+    Statement(const Statement&) = delete;
+    Statement& operator=(const Statement&) = delete;
+
+    Statement& bind(int index, double value);
+    Statement& bind(int index, std::int64_t value);
+    Statement& bind(int index, const std::string& value);
+    Statement& bind_blob(int index, std::string_view bytes);
+    Statement& bind_null(int index);
+    /// Steps once: true while a row is available, false when done. Throws DbError on failure.
+    bool step();
+    /// Runs a statement that returns no rows.
+    void run();
+    void reset();
+
+    [[nodiscard]] double column_double(int col) const;
+    [[nodiscard]] std::int64_t column_int(int col) const;
+    [[nodiscard]] std::string column_text(int col) const;
+    [[nodiscard]] bool column_is_null(int col) const;
+
+private:
+    Database& db_;
+    sqlite3_stmt* stmt_ = nullptr;
+    std::string sql_;
+};
+
+class Database {
+public:
+    /// Opens (creating if needed) the database at `path` (":memory:" for tests) and brings its schema
+    /// to the newest version. A busy database is retried for busy_timeout_ms before DbError.
+    explicit Database(const std::string& path, int busy_timeout_ms = 5000);
+    ~Database();
+    Database(const Database&) = delete;
+    Database& operator=(const Database&) = delete;
+
+    void exec(std::string_view sql);
+    [[nodiscard]] int schema_version();
+    [[nodiscard]] std::int64_t last_insert_id() const;
+    [[nodiscard]] sqlite3* handle() const { return db_; }
+    [[nodiscard]] const std::string& path() const { return path_; }
+    /// "message (path)" for the last error on this connection.
+    [[nodiscard]] std::string error_text() const;
+
+private:
+    void migrate();
+    sqlite3* db_ = nullptr;
+    std::string path_;
+};
+
+/// Begins a transaction; rolls back in the destructor unless commit() was called. Never throws
+/// from the destructor.
+class Transaction {
+public:
+    explicit Transaction(Database& db);
+    ~Transaction();
+    Transaction(const Transaction&) = delete;
+    Transaction& operator=(const Transaction&) = delete;
+    void commit();
+
+private:
+    Database& db_;
+    bool done_ = false;
+};
+
+}  // namespace emadiag::db

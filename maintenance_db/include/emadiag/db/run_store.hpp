@@ -1,0 +1,58 @@
+#pragma once
+// Runs, their raw logs, samples and estimates, stored under the aircraft's tail number.
+// Every store happens in one transaction: a run is either all there or not there at all.
+#include "emadiag/db/database.hpp"
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace emadiag::db {
+
+struct StoredSample {
+    double t_s = 0, current_a = 0, speed_rad_s = 0, theta_m_rad = 0, hinge_moment_nm = 0, command_deg = 0;
+};
+
+struct StoredEstimate {
+    std::string estimator;  ///< "physics", "network"
+    std::string parameter;  ///< FDJ_Nm, FSJ_Nm, eta_O, eta_A
+    std::optional<double> value;
+    double std_error = 0;
+    bool identifiable = true;
+    std::string method;
+    std::string note;
+};
+
+struct StoredRun {
+    std::int64_t run_id = 0;  ///< set by store_run / load_run
+    std::string tail_number;
+    std::string actuator_serial;
+    std::string started_utc;  ///< ISO 8601
+    std::string source;
+    std::string load_case;
+    std::string sequence;
+    double k_t_nm_per_a = 0, j_kgm2 = 0, tau = 0, sample_period_s = 0;
+    bool valid = true;
+    std::string status_note;
+    std::string meta_json = "{}";
+    std::vector<StoredSample> samples;
+    std::string raw_log_format;  ///< "candump" or "csv"
+    std::string raw_log;         ///< the bytes as received, kept before anything is computed
+    std::vector<StoredEstimate> estimates;
+};
+
+/// Checks a tail number: 1 to 16 characters of A-Z, 0-9 and '-'. Throws DbError naming it.
+void check_tail_number(const std::string& tail_number);
+
+/// Stores the run, its samples, raw log and estimates in one transaction; returns the run id.
+/// Throws DbError naming the field (and sample index) on invalid input; nothing is written then.
+[[nodiscard]] std::int64_t store_run(Database& db, const StoredRun& run);
+
+/// Loads one run with everything stored for it. Throws DbError when there is no such run.
+[[nodiscard]] StoredRun load_run(Database& db, std::int64_t run_id);
+
+/// The runs of one aircraft, oldest first, without samples or raw logs.
+[[nodiscard]] std::vector<StoredRun> list_runs(Database& db, const std::string& tail_number);
+
+}  // namespace emadiag::db

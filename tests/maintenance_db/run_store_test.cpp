@@ -1,0 +1,109 @@
+// The maintenance database against :memory: and temporary files: round trips, one-transaction
+// stores, migrations, and misuse.
+#include "emadiag/db/db_error.hpp"
+#include "emadiag/db/run_store.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+namespace emadiag::db {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::ThrowsMessage;
+
+StoredRun example_run(const std::string& tail = "F-WEMA") {
+    StoredRun r;
+    r.tail_number = tail;
+    r.actuator_serial = "SN-0042";
+    r.started_utc = "2026-11-22T20:00:00Z";
+    r.source = "test";
+    r.load_case = "A";
+    r.sequence = "dyn";
+    r.k_t_nm_per_a = 0.2;
+    r.j_kgm2 = 1.65e-4;
+    r.tau = 800;
+    r.sample_period_s = 5e-4;
+    for (int i = 0; i < 10; ++i) r.samples.push_back({5e-4 * (i + 1), 0.1 * i, -3.0 * i, 0.01 * i, 5.0, -0.1 * i});
+    r.raw_log_format = "candump";
+    r.raw_log = std::string("(1.000000) vcan0 123#00\n\0binary-safe", 32);
+    r.estimates.push_back({"physics", "FDJ_Nm", 0.081, 0.0004, true, "physics-wrls", ""});
+    r.estimates.push_back({"physics", "eta_O", std::nullopt, 0.0, false, "physics-wrls", "not identifiable: constant load"});
+    return r;
+}
+
+TEST(RunStore, StoreThenLoadGivesBackEverything) {
+    Database db(":memory:");
+    EXPECT_EQ(db.schema_version(), 1);
+    const StoredRun in = example_run();
+    const auto id = store_run(db, in);
+    const StoredRun out = load_run(db, id);
+    EXPECT_EQ(out.tail_number, in.tail_number);
+    EXPECT_EQ(out.actuator_serial, in.actuator_serial);
+    ASSERT_EQ(out.samples.size(), in.samples.size());
+    EXPECT_EQ(out.samples[7].speed_rad_s, in.samples[7].speed_rad_s);
+    EXPECT_EQ(out.raw_log, in.raw_log) << "raw logs are kept byte for byte";
+    ASSERT_EQ(out.estimates.size(), 2U);
+    EXPECT_EQ(out.estimates[0].parameter, "FDJ_Nm");
+    EXPECT_DOUBLE_EQ(*out.estimates[0].value, 0.081);
+    EXPECT_FALSE(out.estimates[1].value.has_value());
+    EXPECT_FALSE(out.estimates[1].identifiable);
+}
+
+TEST(RunStore, ListsRunsPerTailNumber) {
+    Database db(":memory:");
+    (void)store_run(db, example_run("F-WEMA"));
+    (void)store_run(db, example_run("F-WEMB"));
+    (void)store_run(db, example_run("F-WEMA"));
+    EXPECT_EQ(list_runs(db, "F-WEMA").size(), 2U);
+    EXPECT_EQ(list_runs(db, "F-WEMB").size(), 1U);
+    EXPECT_TRUE(list_runs(db, "F-NONE").empty());
+}
+
+TEST(RunStore, InvalidRunWritesNothing) {
+    Database db(":memory:");
+    StoredRun bad = example_run();
+    bad.samples[3].current_a = std::nan("");
+    EXPECT_THAT([&] { (void)store_run(db, bad); }, ThrowsMessage<DbError>(HasSubstr("current_a of sample 3 is not a finite number")));
+    bad = example_run();
+    bad.estimates.push_back({"physics", "FDJ_Nm", 0.08, 0.001, true, "dup", ""});  // violates the primary key mid-transaction
+    EXPECT_THAT([&] { (void)store_run(db, bad); }, ThrowsMessage<DbError>(HasSubstr("failed")));
+    EXPECT_TRUE(list_runs(db, "F-WEMA").empty()) << "the failed store was rolled back whole";
+}
+
+TEST(RunStore, MisuseIsAClearError) {
+    Database db(":memory:");
+    EXPECT_THAT([&] { (void)store_run(db, example_run("f wema")); },
+                ThrowsMessage<DbError>(HasSubstr("tail number 'f wema' is not valid")));
+    StoredRun no_log = example_run();
+    no_log.raw_log.clear();
+    EXPECT_THAT([&] { (void)store_run(db, no_log); }, ThrowsMessage<DbError>(HasSubstr("has no raw log")));
+    EXPECT_THAT([&] { (void)load_run(db, 99); }, ThrowsMessage<DbError>(HasSubstr("no run with id 99")));
+    EXPECT_THAT([&] { Statement st(db, "SELEC nonsense"); }, ThrowsMessage<DbError>(HasSubstr("cannot prepare 'SELEC nonsense'")));
+    Transaction tx(db);
+    tx.commit();
+    EXPECT_THAT([&] { tx.commit(); }, ThrowsMessage<DbError>(HasSubstr("already committed")));
+}
+
+TEST(Database, ReopensAFileWithoutMigratingTwiceAndRefusesNewerSchemas) {
+    const auto path = (std::filesystem::temp_directory_path() / "emadiag_db_test.sqlite").string();
+    std::filesystem::remove(path);
+    {
+        Database db(path);
+        (void)store_run(db, example_run());
+    }
+    {
+        Database db(path);
+        EXPECT_EQ(db.schema_version(), 1);
+        EXPECT_EQ(list_runs(db, "F-WEMA").size(), 1U);
+        db.exec("PRAGMA user_version = 99");
+    }
+    EXPECT_THAT([&] { Database db(path); }, ThrowsMessage<DbError>(HasSubstr("schema version 99, newer than")));
+    std::filesystem::remove(path);
+    EXPECT_THAT([] { Database db("/nonexistent/dir/x.sqlite"); }, ThrowsMessage<DbError>(HasSubstr("cannot open database")));
+}
+
+}  // namespace
+}  // namespace emadiag::db
