@@ -1,5 +1,6 @@
 // GCC 12 reports false -Wmaybe-uninitialized inside Eigen's AVX-512 kernels.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"
 // Training time of the paper's Table 5 network: case B, 500 timesteps, 500 runs, 50 neurons,
 // SCG with the paper's stopping rules (goal 1e-6, 12 validation failures, 1000 epochs).
 // The dataset is simulated once (seeded) outside the timed loop; features are built once too.
