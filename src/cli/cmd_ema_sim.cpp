@@ -7,7 +7,10 @@
 
 #include <atomic>
 #include <chrono>
+#include <cerrno>
 #include <csignal>
+#include <cstring>
+#include <sched.h>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -28,6 +31,7 @@ struct EmaSimOptions {
     std::uint64_t fault_seed = 1;
     std::uint32_t serial = 1001;
     std::uint64_t exit_after = 0;
+    int realtime_priority = 0;
 };
 
 const bool registered = register_command(Command{
@@ -48,6 +52,11 @@ const bool registered = register_command(Command{
         sub.add_option("--silent-after", o->silent_after, "Fault: stop transmitting after this fraction of a sequence");
         sub.add_option("--fault-seed", o->fault_seed, "Seed of the fault draws")->capture_default_str();
         sub.add_option("--serial", o->serial, "Serial number reported in EMA_Ident")->capture_default_str();
+        sub.add_option("--realtime-priority", o->realtime_priority,
+                       "Run the bus loop under SCHED_FIFO at this priority (1-99; 0 = normal scheduling), as an EMA's "
+                       "control loop would; needs CAP_SYS_NICE")
+            ->capture_default_str()
+            ->check(CLI::Range(0, 99));
         sub.add_option("--exit-after", o->exit_after, "Exit after this many sequences have ended (0 = run until Ctrl-C)")
             ->capture_default_str();
         return [so, o] {
@@ -75,6 +84,13 @@ const bool registered = register_command(Command{
             sigemptyset(&sa.sa_mask);
             sigaction(SIGINT, &sa, nullptr);
             sigaction(SIGTERM, &sa, nullptr);
+            if (o->realtime_priority > 0) {
+                sched_param sp{};
+                sp.sched_priority = o->realtime_priority;
+                if (::sched_setscheduler(0, SCHED_FIFO, &sp) != 0)
+                    std::fprintf(stderr, "emadiag: warning: --realtime-priority %d: SCHED_FIFO refused (%s); running with normal scheduling\n",
+                                 o->realtime_priority, std::strerror(errno));
+            }
             std::printf("ema-sim on %s: case %s, noise %s, seed %llu, time scale %g\n", o->bus.c_str(), so->load_case.c_str(),
                         so->noise.c_str(), static_cast<unsigned long long>(so->seed), o->time_scale);
             std::fflush(stdout);

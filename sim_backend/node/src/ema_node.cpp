@@ -5,6 +5,8 @@
 
 #include <cmath>
 #ifdef __linux__
+#include <pthread.h>
+#include <sched.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -47,10 +49,15 @@ std::string ms_text(std::chrono::steady_clock::duration d) {
 }
 
 /// Background work yields the CPU to the bus loop (matters on a single CPU, e.g. user-mode Linux).
+/// SCHED_IDLE also undoes a real-time policy inherited from the bus loop (ema-sim --realtime-priority).
 void lower_this_thread_priority() {
 #ifdef __linux__
-    constexpr int kLowestNice = 19;
-    (void)::setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), kLowestNice);
+    sched_param none{};
+    none.sched_priority = 0;
+    if (::pthread_setschedparam(::pthread_self(), SCHED_IDLE, &none) != 0) {
+        constexpr int kLowestNice = 19;
+        (void)::setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), kLowestNice);
+    }
 #endif
 }
 
@@ -181,7 +188,14 @@ void EmaNode::poll(std::chrono::microseconds max_wait) {
 void EmaNode::handle(const can::CanFrame& f, Clock::time_point now) {
     if (f.extended || f.error) return;
     if (f.id == can::icd::kToolHeartbeatId) {
+        // Date the heartbeat from its arrival on the bus (receive timestamp), not from when this loop
+        // got to it, so a late pass cannot stretch the 100 ms deadline.
         last_heartbeat_ = now;
+        if (f.timestamp.count() > 0) {
+            const auto age = std::chrono::system_clock::now().time_since_epoch() - f.timestamp;
+            if (age > Clock::duration::zero() && age < config_.heartbeat_timeout)
+                last_heartbeat_ = now - std::chrono::duration_cast<Clock::duration>(age);
+        }
         return;
     }
     if (auto c = icd_.decode_command(f)) handle_command(*c, now);
