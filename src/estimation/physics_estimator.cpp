@@ -97,15 +97,15 @@ HealthEstimate estimate_brk(const Run& run) {
         }
     }
     auto [fsj_v, fsj_se] = combine(fsj);
-    fsj_se = std::hypot(fsj_se, uniform_equivalent_se(prior.c_half_width * fr_fsj / static_cast<double>(fsj.size())));
+    fsj_se = uniform_plus_gaussian_se(prior.c_half_width * fr_fsj / static_cast<double>(fsj.size()), fsj_se);
     const std::string dirs = a.events.size() == 2 ? "both directions" : "one direction only";
     h.parameters.push_back(fdj.empty()
                                ? not_estimated(kParamFdj, "physics-breakaway",
                                                "not identifiable: too few fully slipping samples after breakaway")
                                : [&] {
                                      auto [v, se] = combine(fdj);
-                                     se = std::hypot(se, uniform_equivalent_se(prior.c_half_width * fr_fdj /
-                                                                                   static_cast<double>(fdj.size())));
+                                     se = uniform_plus_gaussian_se(
+                                         prior.c_half_width * fr_fdj / static_cast<double>(fdj.size()), se);
                                      return estimated(kParamFdj, v, se, "physics-breakaway-slip",
                                                       std::to_string(fdj.size()) + " slip(s)");
                                  }());

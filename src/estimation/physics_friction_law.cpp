@@ -4,11 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 namespace emadiag {
 namespace {
 constexpr double kNinetyFiveQuantile = 1.959963984540054;
 constexpr double kCoveredFraction = 0.95;
+constexpr double kNegligibleFraction = 1e-6;  // one part is negligible: use the other's exact limit
+constexpr int kBisectionSteps = 60;
 }  // namespace
 
 double load_coefficient_opposing(double eta_o) { return 1.0 / eta_o - 1.0; }  // eq. (5), opposing
@@ -40,5 +43,28 @@ LoadCoefficientPrior load_coefficient_prior(double tau) {
 }
 
 double uniform_equivalent_se(double half_width) { return kCoveredFraction * half_width / kNinetyFiveQuantile; }
+
+double uniform_plus_gaussian_se(double half_width, double gaussian_se) {
+    const double h = std::abs(half_width), sigma = std::abs(gaussian_se);
+    if (sigma <= kNegligibleFraction * h) return uniform_equivalent_se(h);
+    if (h <= kNegligibleFraction * sigma) return sigma;
+    auto phi_antiderivative = [](double x) {
+        const double cdf = 0.5 * std::erfc(-x / std::numbers::sqrt2);
+        const double pdf = std::exp(-0.5 * x * x) / std::sqrt(2.0 * std::numbers::pi);
+        return x * cdf + pdf;
+    };
+    auto coverage = [&](double q) {
+        return sigma / (2.0 * h) *
+               (phi_antiderivative((q + h) / sigma) - phi_antiderivative((q - h) / sigma) -
+                phi_antiderivative((h - q) / sigma) + phi_antiderivative(-(q + h) / sigma));
+    };
+    // coverage is increasing in q; the 95 % point lies in [0, h + 1.96 sigma].
+    double lo = 0.0, hi = h + kNinetyFiveQuantile * sigma;
+    for (int it = 0; it < kBisectionSteps; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (coverage(mid) < kCoveredFraction ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi) / kNinetyFiveQuantile;
+}
 
 }  // namespace emadiag

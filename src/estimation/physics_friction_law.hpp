@@ -35,4 +35,13 @@ struct LoadCoefficientPrior {
 /// (0.95 * half_width / 1.96): used for confounds that are uniform, not Gaussian.
 [[nodiscard]] double uniform_equivalent_se(double half_width);
 
+/// The standard error s for which +/-1.96 s covers exactly 95 % of U + N, with U uniform on
+/// [-half_width, half_width] (an eta confound) and N ~ N(0, gaussian_se^2) (the measurement)
+/// independent. The coverage of +/-q is, with G(x) = x Phi(x) + phi(x) the antiderivative of Phi,
+///   P(q) = sigma / (2 h) [G((q + h)/sigma) - G((q - h)/sigma) - G((h - q)/sigma) + G(-(q + h)/sigma)],
+/// solved for P(q) = 0.95 by bisection. hypot(uniform_equivalent_se(h), sigma) is too small when
+/// both parts matter (the sum is more Gaussian than the uniform, whose sd h/sqrt(3) exceeds
+/// 0.95 h / 1.96); this is exact, and reduces to both limits.
+[[nodiscard]] double uniform_plus_gaussian_se(double half_width, double gaussian_se);
+
 }  // namespace emadiag

@@ -267,8 +267,7 @@ WrlsResult fit_friction_wrls(const std::vector<SlipWindow>& windows, double tau)
         double fr_mean = 0;
         for (const auto& w : windows) fr_mean += w.x_opp_nm + w.x_aid_nm;
         fr_mean /= static_cast<double>(n);
-        const double confound_se = uniform_equivalent_se(prior.c_half_width * fr_mean);
-        res.fdj_se_nm = std::hypot(res.fdj_se_nm, confound_se);
+        res.fdj_se_nm = uniform_plus_gaussian_se(prior.c_half_width * fr_mean, res.fdj_se_nm);
         res.eta_o = prior.eta_o_mid;
         res.eta_o_se = 0;
     }
