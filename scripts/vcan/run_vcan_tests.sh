@@ -52,10 +52,13 @@ cat > "$INIT" <<INIT_EOF
 #!/bin/sh
 # PID 1 of the user-mode Linux guest (written by run_vcan_tests.sh).
 export PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin
-export HOME=/tmp TMPDIR=/tmp EMADIAG_VCAN_TIME_SCALE=${EMADIAG_VCAN_TIME_SCALE:-2}
+# Scratch space is a tmpfs of its own inside the work folder, not over /tmp: the build (and so this
+# work folder) may itself live under the host's /tmp, which the guest sees through hostfs.
+mkdir -p "$WORK/scratch"
+export HOME="$WORK/scratch" TMPDIR="$WORK/scratch" EMADIAG_VCAN_TIME_SCALE=${EMADIAG_VCAN_TIME_SCALE:-2}
 mount -t proc proc /proc
 mount -t sysfs sysfs /sys
-mount -t tmpfs -o size=256m tmpfs /tmp
+mount -t tmpfs -o size=256m tmpfs "$WORK/scratch"
 {
     echo "guest kernel \$(uname -r), \$(nproc) cpu"
     M=/usr/lib/uml/modules/\$(uname -r)/kernel
