@@ -395,7 +395,20 @@ BreakawayAnalysis analyse_breakaways(const Run& run) {
             const double lo = s[kb].t_s - period, hi_t = s[kb].t_s;
             const auto pr = profile_breakaway(run, a_traj, std::min(b_traj, kb + 4), lo, hi_t, g1, sigma_w, sigma_th, false);
             ev.method = "exact-speed";
-            if (pr.ok && d * pr.g0 > 0) {
+            // The chatter swings the instantaneous motor torque by k_t u; when the mean excess over
+            // dynamic friction after breakaway, g0, is below half of it, the troughs fall below
+            // dynamic friction and the shaft stick-slips on the current peaks at first. The smooth
+            // trajectory then starts before the shaft really broke away (it fits the slowed start
+            // with an earlier onset), so the data only bracket t_b to [fitted onset, end of the
+            // first-motion period]: uniform over it.
+            const double u_hi = (kDriveSupplyV - kStatorResistanceOhm * std::abs(ramp_demand(hi_t))) * kCurrentLoopStepS /
+                                kStatorInductanceH;
+            const bool stick_slip_start = pr.ok && d * pr.g0 > 0 && d * pr.g0 < 0.5 * c.k_t_nm_per_a * u_hi;
+            if (stick_slip_start) {
+                ev.t_breakaway_s = 0.5 * (pr.t_b + hi_t);
+                ev.t_breakaway_se_s = std::hypot(pr.se, (hi_t - pr.t_b) * kUniformSdFactor);
+                ev.slip_accel_torque_nm = pr.g0;
+            } else if (pr.ok && d * pr.g0 > 0) {
                 ev.t_breakaway_s = pr.t_b;
                 ev.t_breakaway_se_s = pr.se;
                 ev.slip_accel_torque_nm = pr.g0;

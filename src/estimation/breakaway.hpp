@@ -14,6 +14,9 @@
 //  2. The breakaway time t_b:
 //     - clean data: the first sample with d w > 0 brackets t_b to one period; inside it, t_b is
 //       the best fit of the slip trajectory below (or the middle of the period if that fails);
+//       when the fitted g0 is below half a chatter step k_t u / 2, the chatter troughs fall below
+//       dynamic friction and the shaft stick-slips at first, which the smooth trajectory fits
+//       with too early an onset: t_b is then uniform between the fitted onset and the period end;
 //     - noisy data: a profile least-squares fit of the slip trajectory up to the ramp end: for
 //       t > t_b, J dw/dt = g0 + g1 (t - t_b), g1 known from the ramp rate and the load slope;
 //       the start angle is the hold angle and the sequence's end condition (the shaft has moved
