@@ -129,7 +129,8 @@ void load_lane(Lanes<W>& z, int l, const EmaParams& p) {
 /// Runs G interleaved groups of W lanes from rest to the end; lane l of group g fills out[g * W + l].
 /// Interleaving independent groups hides the latency of the step's dependency chain.
 template <int W, int G, bool kFull>
-void run_lanes(const Shared& s, Lanes<W>* z, SimResult* out[W * G], bool record_truth) {
+void run_lanes(const Shared& shared, Lanes<W>* z, SimResult* out[W * G], bool record_truth) {
+    const Shared s = shared;  // a local copy: the lane stores cannot alias it, so its fields stay in registers
     for (int l = 0; l < W * G; ++l) {
         out[l]->samples.resize(static_cast<std::size_t>(s.total_samples));
         if (record_truth) out[l]->truth.resize(static_cast<std::size_t>(s.total_samples));
@@ -146,7 +147,9 @@ void run_lanes(const Shared& s, Lanes<W>* z, SimResult* out[W * G], bool record_
         for (long a = 0; a < aircraft_per_sample; ++a) {
             for (long j = 0; j < s.steps_per_aircraft; ++j) {
                 ++n;
-                for (int g = 0; g < G; ++g) detail::step<W, kFull>(s, z[g], n);
+                const double t_step = static_cast<double>(n) * s.dt;  // section 7: step n runs at t = n dt
+                const double cmd_m = s.tau * detail::deg2rad(detail::command_deg_inline(s.sequence, t_step));
+                for (int g = 0; g < G; ++g) detail::step<W, kFull>(s, z[g], n, cmd_m);
             }
             if (case_b) {
                 for (int g = 0; g < G; ++g) detail::aircraft_update<W, kFull>(s, z[g]);

@@ -122,8 +122,16 @@ inline double& lane(D& v, int l) {
         return v[l];
     }
 }
+/// |a| by clearing the sign bit (one AND; -0 becomes +0, which no caller can tell apart).
 template <class D>
-inline D vabs(D a) { return a < 0.0 ? -a : a; }
+inline D vabs(D a) {
+    if constexpr (std::is_same_v<D, double>) {
+        return std::fabs(a);
+    } else {
+        using I = decltype(a < a);
+        return reinterpret_cast<D>(reinterpret_cast<I>(a) & (I{} + 0x7fffffffffffffffLL));
+    }
+}
 template <class D>
 inline D vclamp(D a, double lo, double hi) {
     a = a < lo ? D{} + lo : a;
@@ -135,8 +143,10 @@ inline D vsgn(D a) {
     return sel(a > 0.0, one, sel(a < 0.0, -one, D{}));
 }
 
+/// One step with the command of step n, cmd_m = tau * radians(command_deg(t = n dt)), computed by
+/// the caller (it is shared by every lane and group of a batch).
 template <int W, bool kFull>
-inline void step(const Shared& shared, Lanes<W>& z, long n) {
+inline void step(const Shared& shared, Lanes<W>& z, long n, double cmd_m) {
     using D = typename Vec<W>::D;
     using M = typename Vec<W>::M;
     const Shared& s = shared;
@@ -161,8 +171,7 @@ inline void step(const Shared& shared, Lanes<W>& z, long n) {
         ramp_rate = sel(phase == kPhaseRampUp, zero + kBrkRampAPerS * dt, zero - kBrkRampAPerS * dt);
     }
 
-    // 1. Command (shared by all lanes).
-    const double cmd_m = s.tau * deg2rad(command_deg_inline(s.sequence, t));
+    // 1. Command: cmd_m (shared by all lanes).
     // 2. Controller.
     const D w_ref = vclamp(s.k_theta * (cmd_m - z.th), -s.w_max, s.w_max);
     const D i_pos = vclamp(s.k_w * (w_ref - z.w), -s.i_max, s.i_max);
@@ -223,28 +232,33 @@ inline void step(const Shared& shared, Lanes<W>& z, long n) {
     }
     const D t_act = t_m - f_r;
     const M moving = w0 != 0.0;
-    const D d = sel(moving, vsgn(w0), sel(t_act > 0.0, one, -one));
-    const D c = sel(f_r * d > 0.0, z.c_opp, z.c_aid);
-    const D abs_fr = vabs(f_r);
-    D dyn = z.fdj + c * abs_fr + extra_dyn;
-    D stat = z.fsj + c * abs_fr + extra_stat;
+    const M w_pos = w0 > 0.0;
+    // Direction d = +1 where d_pos, else -1: sgn(w) while moving, sgn(T_act) (-1 at 0) while stuck.
+    const M d_pos = w_pos | (vnot(moving) & (t_act > 0.0));
+    // F_R d > 0 (opposing), without the multiplication by d = +/-1.
+    const M opposing = (d_pos & (f_r > 0.0)) | (vnot(d_pos) & (f_r < 0.0));
+    const D c = sel(opposing, z.c_opp, z.c_aid);
+    const D c_fr = c * vabs(f_r);
+    D dyn = z.fdj + c_fr;
+    D stat = z.fsj + c_fr;
     if constexpr (kFull) {
-        dyn = sel(in_gap, zero, dyn);
-        stat = sel(in_gap, zero, stat);
+        dyn = sel(in_gap, zero, dyn + extra_dyn);
+        stat = sel(in_gap, zero, stat + extra_stat);
     }
     const M stuck = vnot(moving) & (vabs(t_act) <= stat);
-    const D t_slip = d * dyn + viscous;  // friction while slipping (or breaking away)
+    D t_slip = sel(d_pos, dyn, -dyn);  // d * dyn: friction while slipping (or breaking away)
+    if constexpr (kFull) t_slip = t_slip + viscous;
     const D t_f = sel(stuck, t_act, t_slip);
     // w + dt (T_act - T_F) / J while slipping, arranged so T_act enters last (critical path).
     const D w_free = (w0 - t_slip * s.dt_inv_j) + t_act * s.dt_inv_j;
     // A moving shaft whose speed would change sign stops instead (max/min with 0 keep it one op deep).
     const M reversal_stop = moving & (w_free * w0 < 0.0);
-    const D w_slip = sel(w0 > 0.0, sel(w_free < 0.0, zero, w_free), sel(w_free > 0.0, zero, w_free));
+    const D w_slip = sel(w_pos, sel(w_free < 0.0, zero, w_free), sel(w_free > 0.0, zero, w_free));
     D w1 = sel(moving, w_slip, sel(stuck, zero, w_free));
 
     // 6. Position and end stops.
     D th1 = z.th + dt * w1;
-    const M at_stop = (th1 > s.stop_m) | (th1 < -s.stop_m);
+    const M at_stop = vabs(th1) > s.stop_m;
     th1 = vclamp(th1, -s.stop_m, s.stop_m);
     const D w_before_stop = w1;
     w1 = sel(at_stop, zero, w1);
@@ -282,6 +296,13 @@ inline void step(const Shared& shared, Lanes<W>& z, long n) {
     z.sum_i += i1;
     z.sum_w += w1;
     z.sum_h += h;
+}
+
+/// One step n, computing the command itself.
+template <int W, bool kFull>
+inline void step(const Shared& s, Lanes<W>& z, long n) {
+    const double t = static_cast<double>(n) * s.dt;  // section 7: step n runs at t = n dt
+    step<W, kFull>(s, z, n, s.tau * deg2rad(command_deg_inline(s.sequence, t)));
 }
 
 /// Case B aircraft update every 1e-4 s (section 3 step 7), forward Euler, delta_e in degrees.
