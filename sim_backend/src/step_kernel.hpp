@@ -185,13 +185,16 @@ inline void step(const Shared& shared, Lanes<W>& z, long n, double cmd_m) {
     // 3. Motor: bang-bang voltage, R-L with BEMF (paper section 2.2).
     const D i0 = z.i;
     const D w0 = z.w;
-    // I += dt (V - k_t w - R I) / L with V = V_dc sgn(I_ref - I), arranged so that only one addition
-    // follows the sign decision (the step's critical path).
-    const D i_err = i_ref - i0;
-    const D v = sel(i_err > 0.0, zero + s.v_dc, sel(i_err < 0.0, zero - s.v_dc, zero));
+    // I += dt (V - k_t w - R I) / L with V = V_dc sgn(I_ref - I), arranged so that only the selects
+    // follow the sign decision (the step's critical path): the three candidate currents are ready
+    // before it. sgn(I_ref - I) compares I_ref with I directly (the same for every finite or infinite
+    // pair: a difference of two different doubles is never zero), and I_base + (-dt V_dc / L) is
+    // exactly I_base - dt V_dc / L.
+    const M v_up = i_ref > i0;
+    const M v_down = i_ref < i0;
     const D i_base = i0 - s.dt_over_l * (s.k_t * w0 + s.r * i0);
-    const D di_v = sel(i_err > 0.0, zero + s.dt_over_l * s.v_dc, sel(i_err < 0.0, zero - s.dt_over_l * s.v_dc, zero));
-    const D i1 = i_base + di_v;
+    const double di_v = s.dt_over_l * s.v_dc;
+    const D i1 = sel(v_up, i_base + di_v, sel(v_down, i_base - di_v, i_base + zero));
     z.i = i1;
     D t_m = vclamp(s.k_t * i1, -s.t_max, s.t_max);
 
@@ -265,6 +268,7 @@ inline void step(const Shared& shared, Lanes<W>& z, long n, double cmd_m) {
     if constexpr (kFull) {
         const double half = 0.5 * s.fx.backlash_rad;
         z.gap = vclamp(z.gap + (th1 - z.th), -half, half);
+        const D v = sel(v_up, zero + s.v_dc, sel(v_down, zero - s.v_dc, zero));
         const D i_avg = 0.5 * (i0 + i1);
         z.e_in += v * i_avg * dt;
         z.e_cu += s.r * i0 * i_avg * dt;
