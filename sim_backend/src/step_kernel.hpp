@@ -190,8 +190,18 @@ inline void step(const Shared& shared, Lanes<W>& z, long n, double cmd_m) {
     // before it. sgn(I_ref - I) compares I_ref with I directly (the same for every finite or infinite
     // pair: a difference of two different doubles is never zero), and I_base + (-dt V_dc / L) is
     // exactly I_base - dt V_dc / L.
-    const M v_up = i_ref > i0;
-    const M v_down = i_ref < i0;
+    M v_up, v_down;
+    if (s.sequence == Sequence::Brk) {
+        v_up = i_ref > i0;
+        v_down = i_ref < i0;
+    } else {
+        // I_ref = clamp(y, +/-I_max) = min(max(y, -I_max), I_max) is compared with I without waiting
+        // for the clamp: min(a, M) > I <=> a > I and M > I; max(y, -M) > I <=> y > I or -M > I
+        // (and the mirror images for <).
+        const D y = s.k_w * (w_ref - w0);
+        v_up = ((y > i0) | (-s.i_max > i0)) & (s.i_max > i0);
+        v_down = ((y < i0) & (-s.i_max < i0)) | (s.i_max < i0);
+    }
     const D i_base = i0 - s.dt_over_l * (s.k_t * w0 + s.r * i0);
     const double di_v = s.dt_over_l * s.v_dc;
     const D i1 = sel(v_up, i_base + di_v, sel(v_down, i_base - di_v, i_base + zero));
