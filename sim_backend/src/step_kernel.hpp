@@ -266,8 +266,17 @@ inline void step(const Shared& shared, Lanes<W>& z, long n, double cmd_m) {
     const D w_free = (w0 - t_slip * s.dt_inv_j) + t_act * s.dt_inv_j;
     // A moving shaft whose speed would change sign stops instead (max/min with 0 keep it one op deep).
     const M reversal_stop = moving & (w_free * w0 < 0.0);
-    const D w_slip = sel(w_pos, sel(w_free < 0.0, zero, w_free), sel(w_free > 0.0, zero, w_free));
-    D w1 = sel(moving, w_slip, sel(stuck, zero, w_free));
+    // w_new is 0 (stuck, or a moving shaft whose speed would change sign) or w_free. The two forms
+    // below give the same value in every case; the faster one differs between the scalar step
+    // (one decision, one select) and the vector step (max/min and blends).
+    D w1;
+    if constexpr (W == 1) {
+        const M to_zero = stuck | (w_pos & (w_free < 0.0)) | ((moving & vnot(w_pos)) & (w_free > 0.0));
+        w1 = sel(to_zero, zero, w_free);
+    } else {
+        const D w_slip = sel(w_pos, sel(w_free < 0.0, zero, w_free), sel(w_free > 0.0, zero, w_free));
+        w1 = sel(moving, w_slip, sel(stuck, zero, w_free));
+    }
 
     // 6. Position and end stops.
     D th1 = z.th + dt * w1;
