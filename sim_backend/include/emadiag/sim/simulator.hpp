@@ -101,7 +101,7 @@ struct SimResult {
 [[nodiscard]] std::vector<SimResult> simulate_batch(const std::vector<SimConfig>& configs, unsigned threads = 1);
 inline constexpr int kBatchLanes = 8;
 /// Independent lane groups stepped together to hide the step's latency (kBatchLanes * kBatchGroups per batch).
-inline constexpr int kBatchGroups = 2;
+inline constexpr int kBatchGroups = 3;
 
 /// Adds the noise profile to samples in place (seeded; Gaussian on top of std::mt19937_64),
 /// then quantises to the sensor resolutions. NoiseProfile::None leaves the samples untouched.
