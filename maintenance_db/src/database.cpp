@@ -16,8 +16,15 @@ Database::Database(const std::string& path, int busy_timeout_ms) : path_(path) {
         throw DbError("cannot open database " + path + ": " + msg);
     }
     sqlite3_busy_timeout(db_, busy_timeout_ms);
-    exec("PRAGMA foreign_keys = ON");
-    migrate();
+    try {
+        exec("PRAGMA foreign_keys = ON");
+        migrate();
+    } catch (...) {
+        // The destructor does not run for a constructor that throws: close the connection here.
+        sqlite3_close(db_);
+        db_ = nullptr;
+        throw;
+    }
 }
 
 Database::~Database() { sqlite3_close(db_); }
