@@ -111,8 +111,8 @@ Shared detail::make_shared(const SimConfig& c) {
         throw SimError("sample period is not a whole number of aircraft periods at dt_s = " + std::to_string(p.dt_s));
     }
     s.total_samples = steps_in(duration, kSamplePeriodS, "duration");
-    s.brk_first_hold_steps = steps_in(detail::kBrkFirstHoldS, p.dt_s, "BRK first hold");
-    s.brk_mid_hold_steps = steps_in(detail::kBrkMidHoldS, p.dt_s, "BRK hold");
+    s.brk_first_hold_steps = steps_in(kBrkFirstHoldS, p.dt_s, "BRK first hold");
+    s.brk_mid_hold_steps = steps_in(kBrkMidHoldS, p.dt_s, "BRK hold");
     return s;
 }
 

@@ -29,12 +29,7 @@ inline constexpr double kTailArmM = 20.0;
 inline constexpr double kAirspeedMS = 76.2;
 inline constexpr double kCaseAHingeNm = 5.0;
 inline constexpr double kAExtHingeRateNmPerS = 1990.0;
-// BRK sequence (section 5).
-inline constexpr double kBrkFirstHoldS = 0.05;
-inline constexpr double kBrkMidHoldS = 0.1;
-inline constexpr double kBrkRampAPerS = 10.0;
-inline constexpr double kBrkMoveRad = 0.01;
-// BRK phases.
+// BRK phases (the sequence itself is defined in simulator.hpp, section 5).
 inline constexpr double kPhaseHold0 = 0, kPhaseRampUp = 1, kPhaseHold1 = 2, kPhaseRampDown = 3, kPhaseHold2 = 4;
 
 inline double deg2rad(double d) { return d * (std::numbers::pi / 180.0); }

@@ -42,6 +42,7 @@
 //     se includes the chatter beat's wander of the mean current (it bends the speed between the
 //     period means that stand for the window's end speeds).
 #include "core/run.hpp"
+#include "emadiag/sim/simulator.hpp"
 
 #include <optional>
 #include <string>
@@ -49,11 +50,11 @@
 
 namespace emadiag {
 
-/// Section 5, the BRK sequence.
-inline constexpr double kBrkFirstHoldS = 0.05;
-inline constexpr double kBrkHoldS = 0.1;
-inline constexpr double kBrkRampAPerS = 10.0;
-inline constexpr double kBrkMoveRad = 0.01;
+/// Section 5, the BRK sequence: one definition, shared with the simulator.
+using sim::kBrkFirstHoldS;
+inline constexpr double kBrkHoldS = sim::kBrkMidHoldS;
+using sim::kBrkRampAPerS;
+using sim::kBrkMoveRad;
 /// Section 1, the drive, for the chatter step of the section-5 note.
 inline constexpr double kDriveSupplyV = 270.0;
 inline constexpr double kStatorResistanceOhm = 1.0;

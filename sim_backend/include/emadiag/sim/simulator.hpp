@@ -28,6 +28,14 @@ enum class NoiseProfile { None, Typical };
 /// Surface-angle command in degrees at time t (section 5). BRK commands 0.
 [[nodiscard]] double command_deg(Sequence s, double t_s);
 
+/// The BRK breakaway sequence (section 5): a position hold, then torque-mode current ramps until
+/// the shaft has moved kBrkMoveRad, with a hold between the two directions. The tool side reads the
+/// same definition to analyse BRK runs.
+inline constexpr double kBrkFirstHoldS = 0.05;
+inline constexpr double kBrkMidHoldS = 0.1;
+inline constexpr double kBrkRampAPerS = 10.0;
+inline constexpr double kBrkMoveRad = 0.01;
+
 /// Samples per controller period: 0.5 ms at dt (section 6).
 inline constexpr double kSamplePeriodS = 5e-4;
 /// Aircraft update period in case B (section 3 step 7).
