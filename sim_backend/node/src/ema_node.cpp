@@ -7,8 +7,6 @@
 #ifdef __linux__
 #include <pthread.h>
 #include <sched.h>
-#include <sys/resource.h>
-#include <sys/syscall.h>
 #include <unistd.h>
 #endif
 #include <future>
@@ -48,16 +46,15 @@ std::string ms_text(std::chrono::steady_clock::duration d) {
     return s.str();
 }
 
-/// Background work yields the CPU to the bus loop (matters on a single CPU, e.g. user-mode Linux).
-/// SCHED_IDLE also undoes a real-time policy inherited from the bus loop (ema-sim --realtime-priority).
+/// The simulation worker runs under ordinary scheduling, which undoes a real-time policy inherited
+/// from the bus loop (ema-sim --realtime-priority). It is not demoted further: the simulation of a
+/// whole sequence takes milliseconds, and a demoted worker (SCHED_IDLE or nice 19) starves for
+/// seconds on a busy machine, which delays the start of the sequence.
 void lower_this_thread_priority() {
 #ifdef __linux__
     sched_param none{};
     none.sched_priority = 0;
-    if (::pthread_setschedparam(::pthread_self(), SCHED_IDLE, &none) != 0) {
-        constexpr int kLowestNice = 19;
-        (void)::setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), kLowestNice);
-    }
+    (void)::pthread_setschedparam(::pthread_self(), SCHED_OTHER, &none);
 #endif
 }
 
