@@ -148,17 +148,27 @@ struct ProfileResult {
     bool ok = false;
 };
 
-ProfileResult profile_breakaway(const Run& run, std::size_t a, std::size_t b, double t_lo, double t_hi,
-                                double g1_nm_s, double sigma_w, double sigma_th, bool scale_by_fit) {
-    ProfileResult pr;
-    if (b < a + 2 || !(t_hi > t_lo)) return pr;
+/// Profile of a trajectory fit over a grid of breakaway times t_b in [t_lo, t_hi]: the best t_b, its
+/// one-se half-width (where the SSE rises by one residual variance), and the whole profile.
+/// `fit(t_b)` returns the TrajectoryFit at t_b; `fitted_params` is how many parameters it fits
+/// besides t_b; `scale_by_fit` scales the SSE by max(1, SSE_min / dof).
+struct GridProfile {
+    ProfileResult best;
+    std::vector<double> t_s, sse;  ///< the profile
+    double scale = 1;              ///< residual variance factor
+};
+template <class Fit>
+GridProfile profile_grid(const Run& run, std::size_t a, std::size_t b, double t_lo, double t_hi, Fit fit,
+                         double fitted_params, bool scale_by_fit) {
+    GridProfile gp;
+    if (b < a + 2 || !(t_hi > t_lo)) return gp;
     const double step = kGridStepFraction * run.constants.sample_period_s;
     std::vector<double> ts, sse;
     double best = std::numeric_limits<double>::infinity();
     std::size_t best_i = 0;
     TrajectoryFit best_fit;
     for (double t = t_lo; t <= t_hi + kTimeEpsS; t += step) {
-        const auto f = fit_trajectory(run, a, b, t, g1_nm_s, sigma_w, sigma_th);
+        const TrajectoryFit f = fit(t);
         ts.push_back(t);
         sse.push_back(f.sse);
         if (f.sse < best) {
@@ -167,17 +177,30 @@ ProfileResult profile_breakaway(const Run& run, std::size_t a, std::size_t b, do
             best_fit = f;
         }
     }
-    if (!std::isfinite(best)) return pr;
-    const double dof = static_cast<double>(best_fit.rows) - 3.0;
+    if (!std::isfinite(best)) return gp;
+    const double dof = static_cast<double>(best_fit.rows) - fitted_params;
     const double s2 = scale_by_fit && dof > 0 ? std::max(1.0, best / dof) : 1.0;
     std::size_t lo = best_i, hi = best_i;
     while (lo > 0 && (sse[lo - 1] - best) / s2 <= 1.0) --lo;
     while (hi + 1 < sse.size() && (sse[hi + 1] - best) / s2 <= 1.0) ++hi;
-    pr.t_b = ts[best_i];
-    pr.se = std::max(0.5 * (ts[hi] - ts[lo]), step);
-    pr.g0 = best_fit.g0_nm;
-    pr.ok = true;
-    return pr;
+    gp.best.t_b = ts[best_i];
+    gp.best.se = std::max(0.5 * (ts[hi] - ts[lo]), step);
+    gp.best.g0 = best_fit.g0_nm;
+    gp.best.ok = true;
+    gp.t_s = std::move(ts);
+    gp.sse = std::move(sse);
+    gp.scale = s2;
+    return gp;
+}
+
+ProfileResult profile_breakaway(const Run& run, std::size_t a, std::size_t b, double t_lo, double t_hi,
+                                double g1_nm_s, double sigma_w, double sigma_th, bool scale_by_fit) {
+    constexpr double kFittedParams = 3.0;
+    return profile_grid(
+               run, a, b, t_lo, t_hi,
+               [&](double t) { return fit_trajectory(run, a, b, t, g1_nm_s, sigma_w, sigma_th); }, kFittedParams,
+               scale_by_fit)
+        .best;
 }
 
 /// The hold that ends at `ramp_start_s`: its constant position-mode current demand, from the
@@ -245,40 +268,14 @@ std::optional<double> move_end_time(const Run& run, std::size_t from, double the
 
 /// Profile of fit_trajectory_to_end over t_b in [t_lo, t_hi] (physical: d g0 >= 0): the best t_b,
 /// its one-se half-width, and the whole profile for the posterior of step 5.
-struct EndProfile {
-    ProfileResult best;
-    std::vector<double> t_s, sse;  ///< the profile
-    double scale = 1;              ///< residual variance factor, max(1, SSE_min / dof)
-};
+using EndProfile = GridProfile;
 EndProfile profile_to_end(const Run& run, std::size_t a, std::size_t b, double t_lo, double t_hi, double g1_nm_s,
                           double theta0_rad, double t_end_s, int d, double sigma_w, double sigma_th) {
-    EndProfile ep;
-    if (b < a + 2 || !(t_hi > t_lo)) return ep;
-    const double step = kGridStepFraction * run.constants.sample_period_s;
-    std::vector<double> ts, sse;
-    double best = std::numeric_limits<double>::infinity();
-    std::size_t best_i = 0;
-    TrajectoryFit best_fit;
-    for (double t = t_lo; t <= t_hi + kTimeEpsS; t += step) {
-        const auto f = fit_trajectory_to_end(run, a, b, t, g1_nm_s, theta0_rad, t_end_s, d, sigma_w, sigma_th);
-        ts.push_back(t);
-        sse.push_back(f.sse);
-        if (f.sse < best) { best = f.sse; best_i = ts.size() - 1; best_fit = f; }
-    }
-    if (!std::isfinite(best)) return ep;
-    const double dof = static_cast<double>(best_fit.rows) - 2.0;
-    const double s2 = dof > 0 ? std::max(1.0, best / dof) : 1.0;
-    std::size_t lo = best_i, hi = best_i;
-    while (lo > 0 && (sse[lo - 1] - best) / s2 <= 1.0) --lo;
-    while (hi + 1 < sse.size() && (sse[hi + 1] - best) / s2 <= 1.0) ++hi;
-    ep.best.t_b = ts[best_i];
-    ep.best.se = std::max(0.5 * (ts[hi] - ts[lo]), step);
-    ep.best.g0 = best_fit.g0_nm;
-    ep.best.ok = true;
-    ep.t_s = std::move(ts);
-    ep.sse = std::move(sse);
-    ep.scale = s2;
-    return ep;
+    constexpr double kFittedParams = 2.0;
+    return profile_grid(
+        run, a, b, t_lo, t_hi,
+        [&](double t) { return fit_trajectory_to_end(run, a, b, t, g1_nm_s, theta0_rad, t_end_s, d, sigma_w, sigma_th); },
+        kFittedParams, true);
 }
 
 std::size_t first_sample_starting_at(const Run& run, double t_s, std::size_t from) {
