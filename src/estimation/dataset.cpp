@@ -62,6 +62,13 @@ double HealthLabels::get(const std::string& param) const {
     throw EmadiagError("unknown health parameter '" + param + "' (expected FDJ_Nm, FSJ_Nm, eta_O or eta_A)");
 }
 
+void HealthLabels::apply_to(sim::EmaParams& params) const {
+    params.fdj_nm = fdj_nm;
+    params.fsj_nm = fsj_nm;
+    params.eta_o = eta_o;
+    params.eta_a = eta_a;
+}
+
 double uniform01(std::uint64_t draw) { return static_cast<double>(draw >> 11) * 0x1.0p-53; }
 
 std::string classify_simulation(const sim::SimResult& result, const sim::EmaParams& params) {
@@ -148,10 +155,7 @@ Dataset generate_dataset(const DatasetSpec& spec, unsigned threads, const Datase
             noise_seeds[k] = rng();
             sim::SimConfig& c = configs[k];
             c.params = datasheet;
-            c.params.fdj_nm = labels[k].fdj_nm;
-            c.params.fsj_nm = labels[k].fsj_nm;
-            c.params.eta_o = labels[k].eta_o;
-            c.params.eta_a = labels[k].eta_a;
+            labels[k].apply_to(c.params);
             c.load_case = spec.load_case;
             c.sequence = spec.sequence;
             c.noise = sim::NoiseProfile::None;  // noise is applied after the filter, per run

@@ -36,6 +36,8 @@ struct HealthLabels {
     double eta_a = 0;
     /// Value of a kParam* name.
     [[nodiscard]] double get(const std::string& param) const;
+    /// Sets FDJ, FSJ, eta_O and eta_A of `params` to these labels.
+    void apply_to(sim::EmaParams& params) const;
 };
 
 /// Uniform in [0, 1) from the top 53 bits of a std::mt19937_64 draw.

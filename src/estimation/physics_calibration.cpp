@@ -43,10 +43,7 @@ CalibrationResult evaluate_physics(const CalibrationSpec& spec) {
         c.noise = spec.noise;
         c.seed = spec.seed * kNoiseSeedStride + static_cast<std::uint64_t>(i);
         const HealthLabels h = draw_health_labels(rng, c.params.tau);
-        c.params.fdj_nm = h.fdj_nm;
-        c.params.fsj_nm = h.fsj_nm;
-        c.params.eta_o = h.eta_o;
-        c.params.eta_a = h.eta_a;
+        h.apply_to(c.params);
         configs.push_back(c);
         labels.push_back(h);
     }

@@ -71,10 +71,7 @@ std::vector<sim::EmaParams> range_params(int draws, std::uint64_t seed) {
     for (int i = 0; i < draws; ++i) {
         const HealthLabels h = draw_health_labels(rng, 800.0);
         sim::EmaParams p = sim::EmaParams::datasheet();
-        p.fdj_nm = h.fdj_nm;
-        p.fsj_nm = h.fsj_nm;
-        p.eta_a = h.eta_a;
-        p.eta_o = h.eta_o;
+        h.apply_to(p);
         out.push_back(p);
     }
     return out;
