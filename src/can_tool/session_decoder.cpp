@@ -8,12 +8,6 @@
 namespace emadiag::can_tool {
 namespace {
 
-std::string num(double v) {
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%.17g", v);
-    return buf;
-}
-
 /// Percentages in messages: 4 significant digits.
 std::string pct(double fraction) {
     char buf[40];
@@ -143,12 +137,7 @@ Run SessionDecoder::build_run(const std::string& source) const {
         invalid = "EMA fault " + icd.value_name(icd.status, "FaultCode", static_cast<int>(last_status_->fault));
 
     run.set_meta("source", source);
-    run.set_meta("k_t_Nm_per_A", num(id.k_t_nm_per_a));
-    run.set_meta("J_kgm2", num(id.j_kgm2));
-    run.set_meta("tau", num(id.tau));
-    run.set_meta("sample_period_s", num(id.sample_period_s));
-    run.set_meta("case", run.load_case);
-    run.set_meta("sequence", run.sequence);
+    run.set_required_meta();
     run.set_meta("ema_serial_number", std::to_string(id.serial_number));
     run.set_meta("ema_part_number", std::to_string(id.part_number));
     run.set_meta("ema_firmware", std::to_string(id.firmware_major) + "." + std::to_string(id.firmware_minor) + "." +
@@ -161,7 +150,7 @@ Run SessionDecoder::build_run(const std::string& source) const {
     run.set_meta("frames_lost", std::to_string(st.frames_lost));
     run.set_meta("crc_failures", std::to_string(st.crc_failures));
     run.set_meta("counter_gaps", std::to_string(st.counter_gaps));
-    run.set_meta("loss_fraction", num(loss));
+    run.set_meta("loss_fraction", format_exact(loss));
     run.set_meta("valid", invalid.empty() ? "true" : "false");
     if (!invalid.empty()) run.set_meta("invalid_reason", invalid);
     run.set_meta("command_deg_source", "tool-side sim::command_deg(sequence, t); not in the telemetry");

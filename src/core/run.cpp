@@ -1,6 +1,23 @@
 #include "core/run.hpp"
 
+#include <cstdio>
+
 namespace emadiag {
+
+std::string format_exact(double v) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    return buf;
+}
+
+void Run::set_required_meta() {
+    set_meta("k_t_Nm_per_A", format_exact(constants.k_t_nm_per_a));
+    set_meta("J_kgm2", format_exact(constants.j_kgm2));
+    set_meta("tau", format_exact(constants.tau));
+    set_meta("sample_period_s", format_exact(constants.sample_period_s));
+    set_meta("case", load_case);
+    set_meta("sequence", sequence);
+}
 
 std::optional<std::string> Run::meta_value(const std::string& key) const {
     for (const auto& [k, v] : meta) {

@@ -9,6 +9,9 @@
 
 namespace emadiag {
 
+/// A double with 17 significant digits: reading it back gives the same double.
+[[nodiscard]] std::string format_exact(double v);
+
 struct RunSample {
     double t_s = 0;
     double current_a = 0;
@@ -38,6 +41,9 @@ struct Run {
 
     [[nodiscard]] std::optional<std::string> meta_value(const std::string& key) const;
     void set_meta(const std::string& key, const std::string& value);
+    /// Sets the required keys of the run CSV (k_t_Nm_per_A, J_kgm2, tau, sample_period_s, case,
+    /// sequence) from `constants`, `load_case` and `sequence`, keeping the position of keys already set.
+    void set_required_meta();
     /// Metadata safe for analysis: everything except the simulator's true_* and effect_* keys.
     [[nodiscard]] std::vector<std::pair<std::string, std::string>> analysis_meta() const;
 };

@@ -13,11 +13,6 @@ namespace {
 
 constexpr std::size_t kMaxReportedProblems = 50;
 
-std::string num(double v) {
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%.17g", v);
-    return buf;
-}
 
 std::vector<std::string> split(const std::string& line, char sep) {
     std::vector<std::string> out;
@@ -54,22 +49,21 @@ bool parse_double(const std::string& text, double& out) {
 }  // namespace
 
 void write_run_csv(std::ostream& out, const Run& run) {
-    Run copy_meta = run;
-    copy_meta.set_meta("k_t_Nm_per_A", num(run.constants.k_t_nm_per_a));
-    copy_meta.set_meta("J_kgm2", num(run.constants.j_kgm2));
-    copy_meta.set_meta("tau", num(run.constants.tau));
-    copy_meta.set_meta("sample_period_s", num(run.constants.sample_period_s));
-    copy_meta.set_meta("case", run.load_case);
-    copy_meta.set_meta("sequence", run.sequence);
+    Run copy_meta;  // the metadata only, with the required keys from the run's fields
+    copy_meta.meta = run.meta;
+    copy_meta.constants = run.constants;
+    copy_meta.load_case = run.load_case;
+    copy_meta.sequence = run.sequence;
+    copy_meta.set_required_meta();
     for (const auto& [k, v] : copy_meta.meta) out << "# " << k << '=' << v << '\n';
     out << "t_s,current_A,speed_rad_s,theta_m_rad,hinge_moment_Nm,command_deg";
     for (const auto& col : run.extra_columns) out << ',' << col.first;
     out << '\n';
     for (std::size_t i = 0; i < run.samples.size(); ++i) {
         const RunSample& s = run.samples[i];
-        out << num(s.t_s) << ',' << num(s.current_a) << ',' << num(s.speed_rad_s) << ',' << num(s.theta_m_rad) << ','
-            << num(s.hinge_moment_nm) << ',' << num(s.command_deg);
-        for (const auto& col : run.extra_columns) out << ',' << num(col.second.at(i));
+        out << format_exact(s.t_s) << ',' << format_exact(s.current_a) << ',' << format_exact(s.speed_rad_s) << ',' << format_exact(s.theta_m_rad) << ','
+            << format_exact(s.hinge_moment_nm) << ',' << format_exact(s.command_deg);
+        for (const auto& col : run.extra_columns) out << ',' << format_exact(col.second.at(i));
         out << '\n';
     }
 }

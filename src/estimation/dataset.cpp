@@ -32,11 +32,6 @@ constexpr double kHealthSpread = 0.20;  // section 8: +/-20 %
 constexpr double kDatasheetTau = 800.0;
 constexpr int kChunkPerThread = 2 * sim::kBatchLanes;
 
-std::string num(double v) {
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%.17g", v);
-    return buf;
-}
 
 }  // namespace
 
@@ -110,12 +105,7 @@ Run Dataset::run(std::size_t i) const {
     r.load_case = sim::to_string(spec.load_case);
     r.sequence = sim::to_string(spec.sequence);
     r.set_meta("source", "emadiag dataset");
-    r.set_meta("k_t_Nm_per_A", num(constants.k_t_nm_per_a));
-    r.set_meta("J_kgm2", num(constants.j_kgm2));
-    r.set_meta("tau", num(constants.tau));
-    r.set_meta("sample_period_s", num(constants.sample_period_s));
-    r.set_meta("case", r.load_case);
-    r.set_meta("sequence", r.sequence);
+    r.set_required_meta();
     r.set_meta("noise", sim::to_string(spec.noise));
     r.set_meta("seed", std::to_string(runs[i].noise_seed));
     r.samples.reserve(runs[i].samples.size());
