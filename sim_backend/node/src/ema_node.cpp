@@ -145,12 +145,7 @@ void EmaNode::poll(std::chrono::microseconds max_wait) {
     }
     now = Clock::now();
 
-    // Heartbeat watchdog (ICD: TOOL_Heartbeat missing > 100 ms in GROUND_TEST aborts and holds).
-    if (status_.mode == Mode::GroundTest && status_.state == SequenceState::Running &&
-        now - last_heartbeat_ > config_.heartbeat_timeout) {
-        finish(SequenceState::Aborted, FaultCode::HeartbeatLost,
-               "heartbeat lost: none for " + ms_text(now - last_heartbeat_) + "; holding position");
-    }
+    (void)watchdog_expired();
 
     if (run_ && !run_->streaming && run_->simulation.valid() &&
         run_->simulation.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
@@ -175,7 +170,7 @@ void EmaNode::poll(std::chrono::microseconds max_wait) {
     }
     if (run_ && run_->streaming) stream_due(now);
 
-    if (now >= next_status_) {
+    if (now >= next_status_ && !watchdog_expired()) {
         send_status();
         next_status_ += can::icd::kStatusPeriod;
         if (next_status_ < now) next_status_ = now + can::icd::kStatusPeriod;
@@ -257,6 +252,18 @@ void EmaNode::start_sequence(const can::ToolCommand& c, Clock::time_point) {
     send_status();
 }
 
+bool EmaNode::watchdog_expired() {
+    // Heartbeat watchdog (ICD: TOOL_Heartbeat missing > 100 ms in GROUND_TEST aborts and holds).
+    const auto now = Clock::now();
+    if (status_.mode == Mode::GroundTest && status_.state == SequenceState::Running &&
+        now - last_heartbeat_ > config_.heartbeat_timeout) {
+        finish(SequenceState::Aborted, FaultCode::HeartbeatLost,
+               "heartbeat lost: none for " + ms_text(now - last_heartbeat_) + "; holding position");
+        return true;
+    }
+    return false;
+}
+
 void EmaNode::stream_due(Clock::time_point now) {
     Running& r = *run_;
     const double period_s = sim::kSamplePeriodS * config_.time_scale;
@@ -264,6 +271,8 @@ void EmaNode::stream_due(Clock::time_point now) {
         const auto due = r.stream_start + std::chrono::duration_cast<Clock::duration>(
                                               std::chrono::duration<double>(static_cast<double>(r.next + 1) * period_s));
         if (due > now) return;
+        // A pass that woke late sends a burst of due samples: the watchdog is checked before each.
+        if (watchdog_expired()) return;
         if (r.next == r.silent_at && !silent_) {
             event("going silent at sample " + std::to_string(r.next) + " (fault injection)");
             silent_ = true;

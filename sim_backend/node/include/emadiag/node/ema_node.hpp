@@ -75,6 +75,9 @@ private:
     void handle_command(const can::ToolCommand& c, Clock::time_point now);
     void start_sequence(const can::ToolCommand& c, Clock::time_point now);
     void stream_due(Clock::time_point now);
+    /// The heartbeat watchdog, checked on a fresh clock reading right before anything is sent while
+    /// a sequence runs; aborts (and returns true) when the heartbeat is more than 100 ms overdue.
+    bool watchdog_expired();
     void finish(can::icd::SequenceState state, can::icd::FaultCode fault, const std::string& why);
     void send(const can::CanFrame& f);
     void send_status();
