@@ -9,6 +9,7 @@
 #include <limits>
 #include <numbers>
 #include <optional>
+#include <tuple>
 
 namespace emadiag {
 namespace {
@@ -23,6 +24,8 @@ constexpr double kHingeFitS = 0.02;
 constexpr std::size_t kMinRampSamples = 4;
 constexpr double kSlipSpeedFraction = 0.3;
 constexpr double kUniformSdFactor = 0.28867513459481287;  // 1/sqrt(12)
+constexpr int kStickSlipPieces = 40;
+constexpr double kNinetyFiveZ = 1.959963984540054;  // components standing for the uniform stick-slip segment
 
 struct Stats {
     double mean = 0, sd = 0;
@@ -298,6 +301,87 @@ double chatter_mean_current_a(double i_ref_a, double ramp_a_s) {
     return (i_ref_a > 0 ? 1.0 : -1.0) * (logmean - shift);
 }
 
+std::pair<double, double> mixture_moments(const std::vector<MixtureComponent>& mix) {
+    double w = 0, m1 = 0, m2 = 0;
+    for (const auto& c : mix) {
+        w += c.weight;
+        m1 += c.weight * c.mean;
+        m2 += c.weight * (c.mean * c.mean + c.sd * c.sd);
+    }
+    if (!(w > 0)) return {0.0, 0.0};
+    const double mean = m1 / w;
+    return {mean, std::sqrt(std::max(0.0, m2 / w - mean * mean))};
+}
+
+PosteriorSummary product_posterior(const std::vector<std::vector<MixtureComponent>>& mixes, const HealthRange& band) {
+    constexpr double kGridSpanSd = 6.0;
+    constexpr int kGridPoints = 4000;
+    constexpr double kMass = 0.95;
+    PosteriorSummary out;
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo, finest = lo;
+    for (const auto& mix : mixes) {
+        for (const auto& c : mix) {
+            lo = std::min(lo, c.mean - kGridSpanSd * c.sd);
+            hi = std::max(hi, c.mean + kGridSpanSd * c.sd);
+            finest = std::min(finest, c.sd);
+        }
+    }
+    if (mixes.empty() || !(hi > lo) || !(finest > 0)) {
+        if (!mixes.empty()) std::tie(out.mean, out.sd) = mixture_moments(mixes.front());
+        out.se95 = out.sd;
+        return out;
+    }
+    const double step = (hi - lo) / kGridPoints;
+    const auto grid = [&](int k) { return lo + k * step; };
+    std::vector<double> log_density(kGridPoints + 1, 0.0), p(kGridPoints + 1);
+    for (const auto& mix : mixes) {
+        std::fill(p.begin(), p.end(), 0.0);
+        for (const auto& c : mix) {  // each component only over its own +/- kGridSpanSd
+            const int k0 = std::max(0, static_cast<int>(std::floor((c.mean - kGridSpanSd * c.sd - lo) / step)));
+            const int k1 = std::min(kGridPoints, static_cast<int>(std::ceil((c.mean + kGridSpanSd * c.sd - lo) / step)));
+            for (int k = k0; k <= k1; ++k) {
+                const double z = (grid(k) - c.mean) / c.sd;
+                p[static_cast<std::size_t>(k)] += c.weight / c.sd * std::exp(-0.5 * z * z);
+            }
+        }
+        for (std::size_t k = 0; k < p.size(); ++k) {
+            log_density[k] += p[k] > 0 ? std::log(p[k]) : -std::numeric_limits<double>::infinity();
+        }
+    }
+    const double top = *std::max_element(log_density.begin(), log_density.end());
+    if (!std::isfinite(top)) {  // the looks do not overlap at all: fall back to the first
+        std::tie(out.mean, out.sd) = mixture_moments(mixes.front());
+        out.se95 = out.sd;
+        return out;
+    }
+    double w = 0, m1 = 0, m2 = 0;
+    for (int k = 0; k <= kGridPoints; ++k) {
+        const double x = grid(k);
+        const double in_band = x >= band.lo && x <= band.hi ? 1.0 : kOutOfBandPrior;
+        p[static_cast<std::size_t>(k)] = in_band * std::exp(log_density[static_cast<std::size_t>(k)] - top);
+        w += p[static_cast<std::size_t>(k)];
+        m1 += p[static_cast<std::size_t>(k)] * x;
+        m2 += p[static_cast<std::size_t>(k)] * x * x;
+    }
+    out.mean = m1 / w;
+    out.sd = std::sqrt(std::max(0.0, m2 / w - out.mean * out.mean));
+    // Smallest half-width h with kMass of the posterior inside mean +/- h (bisection on h).
+    auto mass_within = [&](double h) {
+        double m = 0;
+        for (int k = 0; k <= kGridPoints; ++k) {
+            if (std::abs(grid(k) - out.mean) <= h) m += p[static_cast<std::size_t>(k)];
+        }
+        return m / w;
+    };
+    double h_lo = 0, h_hi = hi - lo;
+    for (int it = 0; it < 40; ++it) {
+        const double h = 0.5 * (h_lo + h_hi);
+        (mass_within(h) >= kMass ? h_hi : h_lo) = h;
+    }
+    out.se95 = std::max(h_hi, step) / kNinetyFiveZ;
+    return out;
+}
+
 BreakawayAnalysis analyse_breakaways(const Run& run) {
     BreakawayAnalysis out;
     const auto& s = run.samples;
@@ -478,31 +562,36 @@ BreakawayAnalysis analyse_breakaways(const Run& run) {
             };
             double best = std::numeric_limits<double>::infinity();
             for (double v : profile.sse) best = std::min(best, v);
-            double w_sum = 0, m1 = 0, m2 = 0;
+            // Each profile point is a component; the other error terms (hold demand, chatter
+            // sweep, load) blur every one of them alike.
+            const double blur = std::sqrt(std::pow(c.k_t_nm_per_a * ev.ramp_current_se_a, 2) +
+                                          std::pow(c.k_t_nm_per_a * ev.chatter_se_a, 2) +
+                                          std::pow(ev.load_torque_se_nm, 2));
+            auto& mix = ev.threshold_posterior;
+            double w_sum = 0;
             for (std::size_t i = 0; i < profile.t_s.size(); ++i) {
                 const double w = std::exp(-(profile.sse[i] - best) / (2 * profile.scale));
-                const double v = threshold_at(profile.t_s[i]);
-                w_sum += w; m1 += w * v; m2 += w * v * v;
+                mix.push_back({threshold_at(profile.t_s[i]), blur, w});
+                w_sum += w;
             }
             if (profile_from_g0_zero) {
                 const double step_nm = c.k_t_nm_per_a * kBrkRampAPerS * kGridStepFraction * period;
                 const double width_nm = c.k_t_nm_per_a * u;
                 const double w = std::exp(-(profile.sse.front() - best) / (2 * profile.scale)) * width_nm / step_nm;
-                const double mid = threshold_at(profile.t_s.front()) - 0.5 * width_nm;
+                const double top = threshold_at(profile.t_s.front());
+                const double piece = width_nm / kStickSlipPieces;
+                const double sd = std::hypot(blur, piece * kUniformSdFactor);
+                for (int k = 0; k < kStickSlipPieces; ++k) mix.push_back({top - (k + 0.5) * piece, sd, w / kStickSlipPieces});
                 w_sum += w;
-                m1 += w * mid;
-                m2 += w * (mid * mid + width_nm * width_nm / 12);
                 ev.stick_slip_weight = w / w_sum;
             }
-            const double mean = m1 / w_sum;
-            const double sd = std::sqrt(std::max(0.0, m2 / w_sum - mean * mean));
-            // Report the maximum-likelihood threshold (the best t_b) with the posterior spread
-            // about it, which includes the distance to the posterior mean.
-            const double ml = threshold_at(ev.t_breakaway_s);
-            ev.threshold_nm = ml;
-            ev.threshold_se_nm = std::sqrt(sd * sd + (mean - ml) * (mean - ml) + std::pow(c.k_t_nm_per_a * ev.ramp_current_se_a, 2) +
-                                           std::pow(c.k_t_nm_per_a * ev.chatter_se_a, 2) +
-                                           std::pow(ev.load_torque_se_nm, 2));
+            for (auto& m : mix) m.weight /= w_sum;
+            const auto [mean, sd] = mixture_moments(mix);
+            // Report the posterior mean (the least-squares estimate) and the posterior sd: near a
+            // zero-acceleration start the profile is one-sided and the stick-slip segment lies
+            // wholly below it, so the maximum-likelihood point is biased high.
+            ev.threshold_nm = mean;
+            ev.threshold_se_nm = sd;
         }
 
         // 6. Dynamic friction over the fully slipping samples: from the first sample two after one

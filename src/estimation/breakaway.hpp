@@ -30,22 +30,26 @@
 //     centre decays towards zero at R c / L between jumps of u).
 //  4. F_R at t_b from a local linear fit of the hinge moment.
 //  5. Threshold S_d = d (k_t (I_ref(t_b) + d u_eff) - F_R) = FSJ + c(d)|F_R|, with a standard
-//     error from t_b, I_start, the chatter sweep and F_R. On noisy data S_d is the maximum-
-//     likelihood value (best t_b) and its standard error the posterior spread about it over the
-//     t_b profile (flat prior in S); when the data allow g0 = 0 (the torque only just overcame FDJ),
-//     FSJ - FDJ may be below one chatter step k_t u: the shaft then stick-slips on the current
-//     peaks before it moves, invisibly in noisy means, so the posterior also spreads uniformly
-//     over [S(g0 = 0) - k_t u, S(g0 = 0)] with the likelihood of the zero-acceleration start.
+//     error from t_b, I_start, the chatter sweep and F_R. On noisy data the whole posterior of S
+//     is kept as a Gaussian mixture (threshold_posterior): one component per point of the t_b
+//     profile (a flat prior in S, which is linear in t_b), blurred by the other error terms; and,
+//     when the data allow g0 = 0 (the torque only just overcame FDJ), FSJ - FDJ may be below one
+//     chatter step k_t u: the shaft then stick-slips on the current peaks before it moves,
+//     invisibly in noisy means, so the posterior also spreads uniformly over
+//     [S(g0 = 0) - k_t u, S(g0 = 0)] with the likelihood of the zero-acceleration start. S_d is
+//     its mean. The estimator multiplies the two directions' posteriors (product_posterior).
 //  6. Also the dynamic friction D_d = FDJ + c(d)|F_R| from the telescoped mean T_R over the fully
 //     slipping samples (from two samples after one at 30 % of the final ramp speed, past any
 //     stick-slip, to the ramp end), when there are at least kMinSlipSamples; on clean data its
 //     se includes the chatter beat's wander of the mean current (it bends the speed between the
 //     period means that stand for the window's end speeds).
 #include "core/run.hpp"
+#include "estimation/dataset.hpp"
 #include "emadiag/sim/simulator.hpp"
 
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace emadiag {
@@ -70,6 +74,11 @@ inline constexpr std::size_t kMinSlipSamples = 3;
 /// How far back before the ramp end the trajectory fit looks.
 inline constexpr double kTrajectoryWindowS = 0.04;
 
+/// One component of a Gaussian mixture (a posterior density on a line).
+struct MixtureComponent {
+    double mean = 0, sd = 0, weight = 0;
+};
+
 struct BreakawayEvent {
     int direction = 0;                  ///< +1 (first ramp) or -1 (second ramp)
     std::string method;                 ///< "exact-speed" (clean data) or "trajectory-fit"
@@ -87,6 +96,9 @@ struct BreakawayEvent {
     std::size_t slip_samples = 0;
     double t_move_end_s = 0;            ///< when the shaft had moved kBrkMoveRad (ramp end)
     double stick_slip_weight = 0;       ///< noisy data: posterior weight of a stick-slip start (step 5)
+    /// Noisy data: the whole posterior of S_d (step 5) as a Gaussian mixture, weights summing to 1;
+    /// empty on clean data. threshold_nm is its mean and threshold_se_nm its sd.
+    std::vector<MixtureComponent> threshold_posterior;
 };
 
 struct BreakawayAnalysis {
@@ -101,6 +113,25 @@ struct BreakawayAnalysis {
 /// and jumps by u when it leaves the band I_ref +/- u/2, so the time average over the band is a
 /// logarithmic mean (with the ramp, of the band shifted by ramp L / R). Zero inside +/- u/2.
 [[nodiscard]] double chatter_mean_current_a(double i_ref_a, double ramp_a_s);
+
+/// Mean and sd of a Gaussian mixture (weights need not be normalised). {0, 0} when empty.
+[[nodiscard]] std::pair<double, double> mixture_moments(const std::vector<MixtureComponent>& mix);
+
+/// A posterior on a line, summarised for a report: its mean, and the standard error that makes
+/// mean +/- 1.96 se hold 95 % of it (the sd for a Gaussian; less for flat-topped shapes such as
+/// the uniform stick-slip segment, which +/- 1.96 sd would over-cover).
+struct PosteriorSummary {
+    double mean = 0, se95 = 0, sd = 0;
+};
+
+/// Out-of-band prior density, relative to inside the band: a unit outside the section-8 band is
+/// possible, only less likely; data that place it outside override this.
+inline constexpr double kOutOfBandPrior = 0.01;
+
+/// The normalised product of Gaussian-mixture densities (independent looks at one quantity) with
+/// a soft uniform prior on `band` (kOutOfBandPrior outside), evaluated on a fine grid.
+[[nodiscard]] PosteriorSummary product_posterior(const std::vector<std::vector<MixtureComponent>>& mixes,
+                                                 const HealthRange& band);
 
 /// Finds and measures the breakaway events of a BRK run. Throws EmadiagError when the run is too
 /// short to hold the first position hold.

@@ -2,11 +2,14 @@
 
 #include "core/emadiag_error.hpp"
 #include "estimation/breakaway.hpp"
+#include "estimation/dataset.hpp"
 #include "estimation/physics_friction_law.hpp"
 #include "estimation/physics_wrls.hpp"
 #include "estimation/run_checks.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 #include <string>
 
 namespace emadiag {
@@ -97,6 +100,23 @@ HealthEstimate estimate_brk(const Run& run) {
         }
     }
     auto [fsj_v, fsj_se] = combine(fsj);
+    // Noisy data: both directions see the same FSJ, so its posterior is the product of the two
+    // events' posteriors (each shifted by its c|F_R| at the prior middle) and the section-8 band
+    // as a soft prior. Their densities are skewed (one-sided near a zero-acceleration start, with
+    // a uniform stick-slip segment), so the product carries more than an inverse-variance mean of
+    // two summaries.
+    if (std::all_of(a.events.begin(), a.events.end(), [](const auto& ev) { return !ev.threshold_posterior.empty(); })) {
+        std::vector<std::vector<MixtureComponent>> shifted;
+        for (std::size_t i = 0; i < a.events.size(); ++i) {
+            auto mix = a.events[i].threshold_posterior;
+            const double shift = fsj[i].first - a.events[i].threshold_nm;  // -c |F_R|
+            for (auto& m : mix) m.mean += shift;
+            shifted.push_back(std::move(mix));
+        }
+        const PosteriorSummary post = product_posterior(shifted, health_range(kParamFsj));
+        fsj_v = post.mean;
+        fsj_se = post.se95;
+    }
     fsj_se = uniform_plus_gaussian_se(prior.c_half_width * fr_fsj / static_cast<double>(fsj.size()), fsj_se);
     const std::string dirs = a.events.size() == 2 ? "both directions" : "one direction only";
     h.parameters.push_back(fdj.empty()
