@@ -157,7 +157,7 @@ struct ProfileResult {
 /// besides t_b; `scale_by_fit` scales the SSE by max(1, SSE_min / dof).
 struct GridProfile {
     ProfileResult best;
-    std::vector<double> t_s, sse;  ///< the profile
+    std::vector<double> t_s, sse, g0;  ///< the profile (g0: the fitted J dw/dt just after t_b)
     double scale = 1;              ///< residual variance factor
 };
 template <class Fit>
@@ -166,7 +166,7 @@ GridProfile profile_grid(const Run& run, std::size_t a, std::size_t b, double t_
     GridProfile gp;
     if (b < a + 2 || !(t_hi > t_lo)) return gp;
     const double step = kGridStepFraction * run.constants.sample_period_s;
-    std::vector<double> ts, sse;
+    std::vector<double> ts, sse, g0s;
     double best = std::numeric_limits<double>::infinity();
     std::size_t best_i = 0;
     TrajectoryFit best_fit;
@@ -174,6 +174,7 @@ GridProfile profile_grid(const Run& run, std::size_t a, std::size_t b, double t_
         const TrajectoryFit f = fit(t);
         ts.push_back(t);
         sse.push_back(f.sse);
+        g0s.push_back(f.g0_nm);
         if (f.sse < best) {
             best = f.sse;
             best_i = ts.size() - 1;
@@ -192,6 +193,7 @@ GridProfile profile_grid(const Run& run, std::size_t a, std::size_t b, double t_
     gp.best.ok = true;
     gp.t_s = std::move(ts);
     gp.sse = std::move(sse);
+    gp.g0 = std::move(g0s);
     gp.scale = s2;
     return gp;
 }
@@ -313,7 +315,8 @@ std::pair<double, double> mixture_moments(const std::vector<MixtureComponent>& m
     return {mean, std::sqrt(std::max(0.0, m2 / w - mean * mean))};
 }
 
-PosteriorSummary product_posterior(const std::vector<std::vector<MixtureComponent>>& mixes, const HealthRange& band) {
+PosteriorSummary product_posterior(const std::vector<std::vector<MixtureComponent>>& mixes, const HealthRange& band,
+                                   double uniform_half_width) {
     constexpr double kGridSpanSd = 6.0;
     constexpr int kGridPoints = 4000;
     constexpr double kMass = 0.95;
@@ -354,26 +357,45 @@ PosteriorSummary product_posterior(const std::vector<std::vector<MixtureComponen
         out.se95 = out.sd;
         return out;
     }
+    for (std::size_t k = 0; k < p.size(); ++k) p[k] = std::exp(log_density[k] - top);
+    // The value is the measured quantity plus an independent uniform error of +/- h: the
+    // density is the product's convolved with that box (a running mean over 2 h). The grid is
+    // widened by h on both sides first.
+    const int box = static_cast<int>(std::lround(uniform_half_width / step));
+    std::vector<double> conv(p.size() + 2 * static_cast<std::size_t>(box), 0.0);
+    if (box > 0) {
+        std::vector<double> prefix(p.size() + 1, 0.0);
+        for (std::size_t k = 0; k < p.size(); ++k) prefix[k + 1] = prefix[k] + p[k];
+        for (std::size_t j = 0; j < conv.size(); ++j) {  // conv[j] stands at grid(j - box)
+            const long c0 = static_cast<long>(j) - 2 * box, c1 = static_cast<long>(j);  // p indices [c0, c1]
+            const long a0 = std::max(0L, c0), a1 = std::min(static_cast<long>(p.size()) - 1, c1);
+            conv[j] = a1 >= a0 ? prefix[static_cast<std::size_t>(a1 + 1)] - prefix[static_cast<std::size_t>(a0)] : 0.0;
+        }
+    } else {
+        conv = p;
+    }
+    p = std::move(conv);
+    const double x0 = lo - box * step;
+    const auto at = [&](std::size_t j) { return x0 + static_cast<double>(j) * step; };
     double w = 0, m1 = 0, m2 = 0;
-    for (int k = 0; k <= kGridPoints; ++k) {
-        const double x = grid(k);
-        const double in_band = x >= band.lo && x <= band.hi ? 1.0 : kOutOfBandPrior;
-        p[static_cast<std::size_t>(k)] = in_band * std::exp(log_density[static_cast<std::size_t>(k)] - top);
-        w += p[static_cast<std::size_t>(k)];
-        m1 += p[static_cast<std::size_t>(k)] * x;
-        m2 += p[static_cast<std::size_t>(k)] * x * x;
+    for (std::size_t j = 0; j < p.size(); ++j) {
+        const double x = at(j);
+        p[j] *= x >= band.lo && x <= band.hi ? 1.0 : kOutOfBandPrior;
+        w += p[j];
+        m1 += p[j] * x;
+        m2 += p[j] * x * x;
     }
     out.mean = m1 / w;
     out.sd = std::sqrt(std::max(0.0, m2 / w - out.mean * out.mean));
     // Smallest half-width h with kMass of the posterior inside mean +/- h (bisection on h).
     auto mass_within = [&](double h) {
         double m = 0;
-        for (int k = 0; k <= kGridPoints; ++k) {
-            if (std::abs(grid(k) - out.mean) <= h) m += p[static_cast<std::size_t>(k)];
+        for (std::size_t j = 0; j < p.size(); ++j) {
+            if (std::abs(at(j) - out.mean) <= h) m += p[j];
         }
         return m / w;
     };
-    double h_lo = 0, h_hi = hi - lo;
+    double h_lo = 0, h_hi = hi - lo + 2 * box * step;
     for (int it = 0; it < 40; ++it) {
         const double h = 0.5 * (h_lo + h_hi);
         (mass_within(h) >= kMass ? h_hi : h_lo) = h;
@@ -586,6 +608,17 @@ BreakawayAnalysis analyse_breakaways(const Run& run) {
                 ev.stick_slip_weight = w / w_sum;
             }
             for (auto& m : mix) m.weight /= w_sum;
+            // The same posterior in the dynamic friction D_d = d (k_t I_mean(t_b) - F_R) - d g0:
+            // after the breakaway the mean torque exceeds it by g0 (the stick-slip start at zero
+            // excess). The chatter sweep does not enter: the mean current is the sample mean.
+            const double blur_d = std::hypot(c.k_t_nm_per_a * ev.ramp_current_se_a, ev.load_torque_se_nm);
+            auto dyn_at = [&](std::size_t i) {
+                const double i_mean = chatter_mean_current_a(ramp_demand(profile.t_s[i]), kBrkRampAPerS);
+                return d * (c.k_t_nm_per_a * i_mean - ev.load_torque_nm) - d * profile.g0[i];
+            };
+            auto& dmix = ev.dynamic_posterior;
+            for (std::size_t i = 0; i < profile.t_s.size(); ++i) dmix.push_back({dyn_at(i), blur_d, mix[i].weight});
+            if (profile_from_g0_zero) dmix.push_back({dyn_at(0), blur_d, ev.stick_slip_weight});
             const auto [mean, sd] = mixture_moments(mix);
             // Report the posterior mean (the least-squares estimate) and the posterior sd: near a
             // zero-acceleration start the profile is one-sided and the stick-slip segment lies

@@ -99,6 +99,8 @@ struct BreakawayEvent {
     /// Noisy data: the whole posterior of S_d (step 5) as a Gaussian mixture, weights summing to 1;
     /// empty on clean data. threshold_nm is its mean and threshold_se_nm its sd.
     std::vector<MixtureComponent> threshold_posterior;
+    /// Noisy data: the posterior of D_d = FDJ + c(d)|F_R| from the same slip trajectory (step 6).
+    std::vector<MixtureComponent> dynamic_posterior;
 };
 
 struct BreakawayAnalysis {
@@ -128,10 +130,11 @@ struct PosteriorSummary {
 /// possible, only less likely; data that place it outside override this.
 inline constexpr double kOutOfBandPrior = 0.01;
 
-/// The normalised product of Gaussian-mixture densities (independent looks at one quantity) with
-/// a soft uniform prior on `band` (kOutOfBandPrior outside), evaluated on a fine grid.
+/// The normalised product of Gaussian-mixture densities (independent looks at one quantity),
+/// convolved with a uniform error of +/- uniform_half_width (the eta confound of c|F_R|), with a
+/// soft uniform prior on `band` (kOutOfBandPrior outside), evaluated on a fine grid.
 [[nodiscard]] PosteriorSummary product_posterior(const std::vector<std::vector<MixtureComponent>>& mixes,
-                                                 const HealthRange& band);
+                                                 const HealthRange& band, double uniform_half_width = 0.0);
 
 /// Finds and measures the breakaway events of a BRK run. Throws EmadiagError when the run is too
 /// short to hold the first position hold.

@@ -8,6 +8,7 @@
 #include "estimation/run_checks.hpp"
 
 #include <algorithm>
+#include <optional>
 #include <cmath>
 #include <vector>
 #include <string>
@@ -87,49 +88,85 @@ HealthEstimate estimate_brk(const Run& run) {
         throw EmadiagError("BRK run: no breakaway event found (" + why + ")");
     }
     const auto prior = load_coefficient_prior(run.constants.tau);
-    std::vector<std::pair<double, double>> fsj, fdj;
-    double fr_fsj = 0, fr_fdj = 0;
+    // Each event measures S_d = FSJ + c(d)|F_R| and D_d = FDJ + c(d)|F_R|; c at the prior middle,
+    // and its uniform spread (the eta confound) goes into the se.
+    double fr_sum = 0;
+    std::vector<double> shift;  // -c(d)|F_R| per event
     for (const auto& ev : a.events) {
         const double fr = ev.load_torque_nm;
-        const double c = fr * ev.direction > 0 ? prior.c_opp_mid : prior.c_aid_mid;
-        fsj.emplace_back(ev.threshold_nm - c * std::abs(fr), ev.threshold_se_nm);  // section 5
-        fr_fsj += std::abs(fr);
-        if (ev.dynamic_friction_nm) {
-            fdj.emplace_back(*ev.dynamic_friction_nm - c * std::abs(fr), ev.dynamic_friction_se_nm);  // eq. (5)
-            fr_fdj += std::abs(fr);
-        }
+        shift.push_back(-(fr * ev.direction > 0 ? prior.c_opp_mid : prior.c_aid_mid) * std::abs(fr));
+        fr_sum += std::abs(fr);
     }
-    auto [fsj_v, fsj_se] = combine(fsj);
-    // Noisy data: both directions see the same FSJ, so its posterior is the product of the two
-    // events' posteriors (each shifted by its c|F_R| at the prior middle) and the section-8 band
-    // as a soft prior. Their densities are skewed (one-sided near a zero-acceleration start, with
-    // a uniform stick-slip segment), so the product carries more than an inverse-variance mean of
-    // two summaries.
-    if (std::all_of(a.events.begin(), a.events.end(), [](const auto& ev) { return !ev.threshold_posterior.empty(); })) {
-        std::vector<std::vector<MixtureComponent>> shifted;
+    const double confound_nm = prior.c_half_width * fr_sum / static_cast<double>(a.events.size());
+    // Clean data: inverse-variance mean of the events. Noisy data: both directions see the same
+    // friction, so its posterior is the product of the events' posteriors (shifted by -c|F_R|)
+    // with the section-8 band as a soft prior. Those densities are skewed (one-sided near a
+    // zero-acceleration start, with a uniform stick-slip segment), so the product carries more
+    // than an inverse-variance mean of two summaries.
+    auto combine_events = [&](const char* param, auto value_of, auto posterior_of) -> std::optional<std::pair<double, double>> {
+        const bool noisy = std::all_of(a.events.begin(), a.events.end(), [&](const auto& ev) { return !posterior_of(ev).empty(); });
+        if (noisy) {
+            std::vector<std::vector<MixtureComponent>> mixes;
+            for (std::size_t i = 0; i < a.events.size(); ++i) {
+                auto mix = posterior_of(a.events[i]);
+                for (auto& m : mix) m.mean += shift[i];
+                mixes.push_back(std::move(mix));
+            }
+            const PosteriorSummary post = product_posterior(mixes, health_range(param), confound_nm);
+            return std::pair{post.mean, post.se95};
+        }
+        std::vector<std::pair<double, double>> looks;
         for (std::size_t i = 0; i < a.events.size(); ++i) {
-            auto mix = a.events[i].threshold_posterior;
-            const double shift = fsj[i].first - a.events[i].threshold_nm;  // -c |F_R|
-            for (auto& m : mix) m.mean += shift;
-            shifted.push_back(std::move(mix));
+            if (const auto v = value_of(a.events[i])) looks.emplace_back(v->first + shift[i], v->second);
         }
-        const PosteriorSummary post = product_posterior(shifted, health_range(kParamFsj));
-        fsj_v = post.mean;
-        fsj_se = post.se95;
+        if (looks.empty()) return std::nullopt;
+        return combine(looks);  // the confound is added below
+    };
+    const auto fsj_c = combine_events(
+        kParamFsj, [](const BreakawayEvent& ev) { return std::optional{std::pair{ev.threshold_nm, ev.threshold_se_nm}}; },
+        [](const BreakawayEvent& ev) -> const std::vector<MixtureComponent>& { return ev.threshold_posterior; });
+    const auto fdj_c = combine_events(
+        kParamFdj,
+        [](const BreakawayEvent& ev) {
+            return ev.dynamic_friction_nm ? std::optional{std::pair{*ev.dynamic_friction_nm, ev.dynamic_friction_se_nm}}
+                                          : std::nullopt;
+        },
+        [](const BreakawayEvent& ev) -> const std::vector<MixtureComponent>& { return ev.dynamic_posterior; });
+    auto fsj = fsj_c, fdj = fdj_c;
+    if (a.clean) {
+        // Clean data measure S = FSJ + c|F_R| and D = FDJ + c|F_R| almost exactly (c the same both
+        // ways by eq. (4), to a few 1e-6 N m), so c is confined to the values that keep FSJ, FDJ and
+        // eta inside the section-8 band; at the band's edges that narrows the confound. A unit
+        // outside the band (no such c) keeps the whole prior range of c.
+        const double fr = fr_sum / static_cast<double>(a.events.size());
+        const double c_mid = 0.5 * (prior.c_opp_mid + prior.c_aid_mid);
+        double c_lo = c_mid - prior.c_half_width, c_hi = c_mid + prior.c_half_width;
+        if (fr > 0) {
+            auto confine = [&](const std::optional<std::pair<double, double>>& v, const char* param) {
+                if (!v) return;
+                const HealthRange band = health_range(param);
+                const double measured = v->first + c_mid * fr;
+                c_lo = std::max(c_lo, (measured - band.hi) / fr);
+                c_hi = std::min(c_hi, (measured - band.lo) / fr);
+            };
+            const double lo0 = c_lo, hi0 = c_hi;
+            confine(fsj_c, kParamFsj);
+            confine(fdj_c, kParamFdj);
+            if (c_lo > c_hi) { c_lo = lo0; c_hi = hi0; }
+        }
+        const double c_hat = 0.5 * (c_lo + c_hi), half_nm = 0.5 * (c_hi - c_lo) * fr;
+        auto apply = [&](std::optional<std::pair<double, double>>& v) {
+            if (v) *v = {v->first - (c_hat - c_mid) * fr, uniform_plus_gaussian_se(half_nm, v->second)};
+        };
+        apply(fsj);
+        apply(fdj);
     }
-    fsj_se = uniform_plus_gaussian_se(prior.c_half_width * fr_fsj / static_cast<double>(fsj.size()), fsj_se);
     const std::string dirs = a.events.size() == 2 ? "both directions" : "one direction only";
-    h.parameters.push_back(fdj.empty()
-                               ? not_estimated(kParamFdj, "physics-breakaway",
-                                               "not identifiable: too few fully slipping samples after breakaway")
-                               : [&] {
-                                     auto [v, se] = combine(fdj);
-                                     se = uniform_plus_gaussian_se(
-                                         prior.c_half_width * fr_fdj / static_cast<double>(fdj.size()), se);
-                                     return estimated(kParamFdj, v, se, "physics-breakaway-slip",
-                                                      std::to_string(fdj.size()) + " slip(s)");
-                                 }());
-    h.parameters.push_back(estimated(kParamFsj, fsj_v, fsj_se, "physics-breakaway",
+    h.parameters.push_back(fdj ? estimated(kParamFdj, fdj->first, fdj->second,
+                                           a.clean ? "physics-breakaway-slip" : "physics-breakaway-trajectory", dirs)
+                               : not_estimated(kParamFdj, "physics-breakaway",
+                                               "not identifiable: too few fully slipping samples after breakaway"));
+    h.parameters.push_back(estimated(kParamFsj, fsj->first, fsj->second, "physics-breakaway",
                                      dirs + (a.clean ? ", exact speed" : ", trajectory fit")));
     const std::string eta_note = "not identifiable: a BRK run slips too briefly to separate eta from FDJ/FSJ";
     h.parameters.push_back(not_estimated(kParamEtaO, "physics-breakaway", eta_note));

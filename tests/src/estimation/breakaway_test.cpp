@@ -128,15 +128,55 @@ TEST(Breakaway, TypicalNoiseIsWithinItsUncertaintyAndWithinThreePercentWhereObse
                 << "FSJ " << *fsj->value << " +/- " << fsj->std_error << " vs " << truth;
         } else {
             // Stick-slip on the current peaks (FSJ - FDJ below one chatter step k_t u): the
-            // breakaway is invisible in noisy means; the estimate is the start of the visible
-            // motion, FDJ + k_t u, so it may be high by up to about one chatter step.
+            // breakaway is invisible in noisy means; the data only bound FSJ to about
+            // [FDJ, FDJ + k_t u], so the estimate may be off by up to about one chatter step.
             EXPECT_LT(std::abs(err), kStickSlipBoundFactor * kChatterTorqueNm)
                 << "FSJ " << *fsj->value << " vs " << truth << " (stick-slip, FSJ - FDJ = " << gap << ")";
         }
         if (truth - c.config.params.fdj_nm >= kTypicalLargeGapNm) {
             EXPECT_LE(std::abs(err) / truth, kTypicalRelTolerance) << "FSJ " << *fsj->value << " vs " << truth;
         }
+        // FDJ from the same slip trajectories: every run gets one, within its uncertainty.
+        const auto* fdj = h.find(kParamFdj);
+        ASSERT_TRUE(fdj && fdj->value);
+        EXPECT_EQ(fdj->method, "physics-breakaway-trajectory");
+        EXPECT_LT(std::abs(*fdj->value - c.config.params.fdj_nm), kTypicalZLimit * fdj->std_error)
+            << "FDJ " << *fdj->value << " +/- " << fdj->std_error << " vs " << c.config.params.fdj_nm;
     }
+}
+
+TEST(ProductPosterior, TwoGaussiansGiveTheInverseVarianceMean) {
+    // N(0.10, 0.002) x N(0.11, 0.001): mean (0.10/4 + 0.11/1) / (1/4 + 1) = 0.108, sd sqrt(1/1.25).
+    const std::vector<std::vector<MixtureComponent>> mixes{{{0.10, 0.002, 1.0}}, {{0.11, 0.001, 1.0}}};
+    const PosteriorSummary p = product_posterior(mixes, HealthRange{0.0, 1.0});
+    EXPECT_NEAR(p.mean, 0.108, 1e-6);
+    EXPECT_NEAR(p.sd, 0.001 * std::sqrt(1 / 1.25), 1e-6);
+    EXPECT_NEAR(p.se95, p.sd, 0.01 * p.sd);  // Gaussian: the 95 % half-width is 1.96 sd
+}
+
+TEST(ProductPosterior, AFlatPosteriorGetsThe95PercentHalfWidthNotTheSd) {
+    // A uniform [0.1, 0.12] built from many narrow components: 95 % lies within +/- 0.0095 of
+    // the middle, so se95 = 0.0095 / 1.96, smaller than the sd 0.02 / sqrt(12).
+    std::vector<MixtureComponent> flat;
+    for (int k = 0; k < 200; ++k) flat.push_back({0.1 + (k + 0.5) * 1e-4, 2e-5, 1.0 / 200});
+    const PosteriorSummary p = product_posterior({flat}, HealthRange{0.0, 1.0});
+    EXPECT_NEAR(p.mean, 0.11, 1e-5);
+    EXPECT_NEAR(p.sd, 0.02 / std::sqrt(12.0), 2e-4);
+    EXPECT_NEAR(p.se95, 0.0095 / 1.959964, 2e-4);
+}
+
+TEST(ProductPosterior, TheUniformConfoundWidensAndTheBandPullsIn) {
+    const std::vector<std::vector<MixtureComponent>> one{{{0.10, 1e-4, 1.0}}};
+    // Convolved with +/- 0.002 uniform: sd ~ 0.002 / sqrt(3).
+    const PosteriorSummary wide = product_posterior(one, HealthRange{0.0, 1.0}, 0.002);
+    EXPECT_NEAR(wide.mean, 0.10, 1e-5);
+    EXPECT_NEAR(wide.sd, 0.002 / std::sqrt(3.0), 5e-5);
+    // A band starting at 0.101 keeps most of the mass above it (out-of-band prior 1 %).
+    const PosteriorSummary pulled = product_posterior(one, HealthRange{0.101, 1.0}, 0.002);
+    EXPECT_GT(pulled.mean, 0.1005);
+    // Far outside the band the data still win: the prior only scales, it does not clamp.
+    const PosteriorSummary outside = product_posterior(one, HealthRange{0.5, 1.0});
+    EXPECT_NEAR(outside.mean, 0.10, 1e-5);
 }
 
 TEST(Breakaway, ChatterMeanIsALogarithmicMeanAndVanishesNearZero) {
