@@ -106,7 +106,8 @@ std::string format_calibration(const CalibrationResult& r) {
         os << std::setprecision(4) << " coverage " << std::setw(6) << 100.0 * s.coverage() << " %  (" << s.covered << "/"
            << s.estimated << ")  normalised MSE " << std::setw(10) << s.mse_normalised << "  rel. error mean "
            << std::setw(9) << 100.0 * s.mean_rel_error << " % max " << std::setw(9) << 100.0 * s.max_rel_error
-           << " %  within 1 %/3 %: " << s.within_1pct << "/" << s.within_3pct << "  mean (err/se)^2 " << s.mean_z2;
+           << " %  within 1 %: " << s.within_1pct << "/" << s.estimated << ", 3 %: " << s.within_3pct << "/"
+           << s.estimated << "  mean (err/se)^2 " << s.mean_z2;
         if (s.not_estimated) os << "  (not identifiable in " << s.not_estimated << ")";
         os << '\n';
     }
