@@ -78,6 +78,9 @@ HealthEstimate estimate_dyn(const Run& run) {
     return h;
 }
 
+/// Posterior weight of a stick-slip start above which a noisy BRK event says FSJ is only bounded.
+constexpr double kStickSlipLikely = 0.5;
+
 HealthEstimate estimate_brk(const Run& run) {
     HealthEstimate h;
     h.estimator = "physics";
@@ -166,8 +169,16 @@ HealthEstimate estimate_brk(const Run& run) {
                                            a.clean ? "physics-breakaway-slip" : "physics-breakaway-trajectory", dirs)
                                : not_estimated(kParamFdj, "physics-breakaway",
                                                "not identifiable: too few fully slipping samples after breakaway"));
+    // Noisy data whose every event most likely started by stick-slip: the data bound FSJ to about
+    // [FDJ, FDJ + k_t u] rather than measure it (docs/fsj-identifiability.md); say so.
+    const bool hidden = !a.clean && std::all_of(a.events.begin(), a.events.end(), [](const BreakawayEvent& ev) {
+        return ev.stick_slip_weight >= kStickSlipLikely;
+    });
     h.parameters.push_back(estimated(kParamFsj, fsj->first, fsj->second, "physics-breakaway",
-                                     dirs + (a.clean ? ", exact speed" : ", trajectory fit")));
+                                     dirs + (a.clean ? ", exact speed" : ", trajectory fit") +
+                                         (hidden ? "; breakaway likely hidden by stick-slip on the current chatter "
+                                                   "(FSJ - FDJ below about 0.02 N m): FSJ is bounded, not measured"
+                                                 : "")));
     const std::string eta_note = "not identifiable: a BRK run slips too briefly to separate eta from FDJ/FSJ";
     h.parameters.push_back(not_estimated(kParamEtaO, "physics-breakaway", eta_note));
     h.parameters.push_back(not_estimated(kParamEtaA, "eq4", eta_note));

@@ -145,6 +145,25 @@ TEST(Breakaway, TypicalNoiseIsWithinItsUncertaintyAndWithinThreePercentWhereObse
     }
 }
 
+TEST(Breakaway, AStickSlipStartSaysFsjIsBoundedNotMeasured) {
+    // FSJ - FDJ = 0.006 N m, well below one chatter step: the breakaway hides in stick-slip.
+    // FSJ - FDJ = 0.06 N m: a clean breakaway.
+    sim::EmaParams hidden = sim::EmaParams::datasheet(), clear = hidden;
+    hidden.fdj_nm = 0.094;
+    hidden.fsj_nm = 0.100;
+    clear.fdj_nm = 0.070;
+    clear.fsj_nm = 0.130;
+    const auto cases = brk_runs({hidden, clear}, sim::NoiseProfile::Typical, 3);
+    const HealthEstimate h0 = estimate_physics(cases[0].run), h1 = estimate_physics(cases[1].run);
+    const auto* fsj0 = h0.find(kParamFsj);
+    const auto* fsj1 = h1.find(kParamFsj);
+    ASSERT_TRUE(fsj0 && fsj0->value && fsj1 && fsj1->value);
+    EXPECT_THAT(fsj0->note, HasSubstr("bounded, not measured"));
+    EXPECT_LT(std::abs(*fsj0->value - hidden.fsj_nm), 1.96 * fsj0->std_error);
+    EXPECT_THAT(fsj1->note, ::testing::Not(HasSubstr("bounded")));
+    EXPECT_LT(std::abs(*fsj1->value - clear.fsj_nm) / clear.fsj_nm, kTypicalRelTolerance);
+}
+
 TEST(ProductPosterior, TwoGaussiansGiveTheInverseVarianceMean) {
     // N(0.10, 0.002) x N(0.11, 0.001): mean (0.10/4 + 0.11/1) / (1/4 + 1) = 0.108, sd sqrt(1/1.25).
     const std::vector<std::vector<MixtureComponent>> mixes{{{0.10, 0.002, 1.0}}, {{0.11, 0.001, 1.0}}};
