@@ -87,6 +87,14 @@ std::vector<SlipWindow> slip_windows(const Run& run) {
         const int d = dir(i);
         if (d != 0 && dir(i - 1) == d && dir(i + 1) == d && std::abs(s[i].current_a) <= current_limit_a) slip[i] = d;
     }
+    // Step 6 of the header: w4 - w2 at the end of period k, (wbar[k] + wbar[k+1] - wbar[k-1] -
+    // wbar[k+2]) / 12; at the ends of the run the stencil is shifted inwards by one sample (the
+    // curvature term changes little over a period).
+    auto fourth_minus_second = [&](std::size_t k) {
+        if (n < 4) return 0.0;
+        const std::size_t b = std::clamp<std::size_t>(k, 1, n - 3);
+        return (s[b].speed_rad_s + s[b + 1].speed_rad_s - s[b - 1].speed_rad_s - s[b + 2].speed_rad_s) / 12.0;
+    };
     std::vector<SlipWindow> out;
     std::size_t segment = 0;
     std::size_t i = 0;
@@ -116,6 +124,11 @@ std::vector<SlipWindow> slip_windows(const Run& run) {
                 w.y_nm = w.direction * ysum / cnt;
                 w.x_opp_nm = xo / cnt;
                 w.x_aid_nm = xa / cnt;
+                // y = d (mean(k_t I - F_R) - J (w_end - w_start) / span), span = t[last] - t[first - 1]
+                // (first >= 1: a slipping sample has a neighbour on each side)
+                const double span_s = s[w.last].t_s - s[w.first - 1].t_s;
+                w.recon_error_nm = w.direction * c.j_kgm2 *
+                                   (fourth_minus_second(w.last) - fourth_minus_second(w.first - 1)) / span_s;
                 out.push_back(w);
             }
             ++segment;
@@ -193,8 +206,11 @@ WrlsResult fit_friction_wrls(const std::vector<SlipWindow>& windows, double tau)
         update_residuals();
         scale = std::max(mad_scale(r), kMinScaleNm);
         for (std::size_t i = 0; i < n; ++i) {
-            const double u = std::abs(r[i]) / (kHuberK * scale);
-            wt[i] = u <= 1 ? 1.0 : 1.0 / u;  // Huber
+            // Step 6a: the window's error sd is max(s, |recon_error|); Huber on the residual in
+            // units of that sd, times the inverse-variance factor s^2 / sd^2.
+            const double sd = std::max(scale, std::abs(windows[i].recon_error_nm));
+            const double u = std::abs(r[i]) / (kHuberK * sd);
+            wt[i] = (u <= 1 ? 1.0 : 1.0 / u) * (scale / sd) * (scale / sd);
         }
         // Weighted Gauss-Newton step: (J^T W J) step = J^T W r, J = [1, g].
         Mat2 a;
@@ -256,6 +272,21 @@ WrlsResult fit_friction_wrls(const std::vector<SlipWindow>& windows, double tau)
     res.hac_fallback = cov.a00 < kMinHacFraction * cov_lag0.a00 || (p == 2 && cov.a11 < kMinHacFraction * cov_lag0.a11);
     cov.a00 = std::max(cov.a00, kMinHacFraction * cov_lag0.a00);
     cov.a11 = std::max(cov.a11, kMinHacFraction * cov_lag0.a11);
+    // Step 6b: D = sum_i h_i recon_error_i, the move of the estimate under the fourth-order
+    // reconstruction at the same weights; |D| / kReconErrorZ in quadrature.
+    {
+        const Mat2 inv = p == 2 ? bread.inverse() : Mat2{1.0 / bread.a00, 0, 0};
+        double d0 = 0, d1 = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            d0 += (inv.a00 + inv.a01 * g[i]) * wt[i] * windows[i].recon_error_nm;
+            d1 += (inv.a01 + inv.a11 * g[i]) * wt[i] * windows[i].recon_error_nm;
+            if (std::abs(windows[i].recon_error_nm) > scale) ++res.recon_weighted_windows;
+        }
+        res.fdj_recon_se_nm = std::abs(d0) / kReconErrorZ;
+        res.eta_o_recon_se = p == 2 ? std::abs(d1) / kReconErrorZ : 0.0;
+        cov.a00 += res.fdj_recon_se_nm * res.fdj_recon_se_nm;
+        cov.a11 += res.eta_o_recon_se * res.eta_o_recon_se;
+    }
     res.fdj_se_nm = std::sqrt(std::max(0.0, cov.a00));
     const double eta_var = cov.a11;
     res.fdj_nm = fdj;

@@ -5,6 +5,7 @@
 #include "emadiag/sim/simulator.hpp"
 #include "estimation/dataset.hpp"
 #include "estimation/physics_estimator.hpp"
+#include "estimation/physics_wrls.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -81,6 +82,43 @@ TEST(PhysicsEstimator, RecoversFdjAndEtaWithin0p1PercentOnNoiselessCaseBRuns) {
         EXPECT_TRUE(within_rel(h.find(kParamEtaA), truth.eta_a, kNoiselessRelTolerance));
         EXPECT_EQ(h.find(kParamEtaA)->method, "eq4");
         EXPECT_GT(h.find(kParamFdj)->std_error, 0.0);
+    }
+}
+
+TEST(PhysicsEstimator, EmbeddedReconstructionErrorIsExactForACubicSpeed) {
+    // Period means of a cubic speed: the second-order boundary speed (wbar[k] + wbar[k+1]) / 2 is
+    // off by exactly T^2 w''/6, the fourth-order one is exact (physics_wrls.hpp step 6). With the
+    // current set so that the period-mean friction is exactly FDJ, y_nm - recon_error_nm must
+    // be FDJ and recon_error_nm the analytic error of y_nm.
+    constexpr double kT = 5e-4, kKt = 0.2, kJ = 1.65e-4, kFdj = 0.08;
+    auto w = [](double t) { return 300.0 + 4000.0 * t - 20000.0 * t * t + 30000.0 * t * t * t; };
+    auto w_integral = [](double t) { return 300.0 * t + 2000.0 * t * t - 20000.0 / 3 * t * t * t + 7500.0 * t * t * t * t; };
+    auto w_second = [](double t) { return -40000.0 + 180000.0 * t; };
+    emadiag::Run run;
+    run.constants = {kKt, kJ, 800.0, kT};
+    run.load_case = "B";
+    run.sequence = "dyn";
+    for (int k = 1; k <= 200; ++k) {
+        const double t1 = k * kT, t0 = t1 - kT;
+        RunSample smp;
+        smp.t_s = t1;
+        smp.speed_rad_s = (w_integral(t1) - w_integral(t0)) / kT;
+        smp.current_a = (kFdj + kJ * (w(t1) - w(t0)) / kT) / kKt;  // period mean of k_t I = FDJ + J dw/dt
+        run.samples.push_back(smp);
+    }
+    const auto windows = slip_windows(run);
+    ASSERT_GT(windows.size(), 10u);
+    for (const auto& win : windows) {
+        const double t_end = static_cast<double>(win.last + 1) * kT, t_start = static_cast<double>(win.first) * kT;
+        const double expected = -kJ * kT * kT / 6.0 * (w_second(t_end) - w_second(t_start)) / (t_end - t_start);
+        EXPECT_GT(std::abs(win.y_nm - kFdj), 1e-7);  // the second-order value does carry the error
+        if (win.first < 2 || win.last + 3 > run.samples.size()) {
+            // at the ends of the run the stencil is shifted inwards by one sample: close, not exact
+            EXPECT_NEAR(win.recon_error_nm, expected, 0.25 * std::abs(expected)) << "window " << win.first;
+            continue;
+        }
+        EXPECT_NEAR(win.recon_error_nm, expected, 1e-11) << "window " << win.first << ".." << win.last;
+        EXPECT_NEAR(win.y_nm - win.recon_error_nm, kFdj, 1e-11) << "window " << win.first << ".." << win.last;
     }
 }
 
