@@ -20,9 +20,10 @@ constexpr double kCoverageHigh = 1.0;
 constexpr double kMeanZ2Low = 0.15;  // mean (err/se)^2: 1 when the se is right on average
 constexpr double kMeanZ2High = 3.0;
 // Noise-free runs: the error is the deterministic reconstruction error of T_R, and the se must
-// be its size, not a bound far above it. A se twice too wide gives a mean (err/se)^2 near 0.25
-// (the HAC-only se gave 0.12 to 0.39 here); the spread of a 60-run mean is about 0.15.
-constexpr double kNoiseFreeMeanZ2Low = 0.5;
+// be its size, not a bound far above it. A se twice too wide gives a mean (err/se)^2 near 0.2
+// (the HAC-only se gave 0.12 to 0.39 on 200 runs); case-B FDJ sits near 0.7 with a 60-run
+// spread of about 0.12 (0.50 to 0.80 over test seeds 1-21), hence 0.45.
+constexpr double kNoiseFreeMeanZ2Low = 0.45;
 constexpr double kNoiseFreeMeanZ2High = 2.0;
 constexpr double kCaseBNoneMseGoal = 2.6e-7;  // issue 4 goals table
 constexpr double kAExtEtaMseGoal = 5.5e-6;
