@@ -74,7 +74,10 @@ HealthEstimate estimate_dyn(const Run& run) {
                      {"condition_number", r.condition_number},
                      {"fr_spread_Nm", r.fr_spread_nm},
                      {"residual_scale_Nm", r.residual_scale_nm},
-                     {"hac_floor_applied", r.hac_fallback ? 1.0 : 0.0}};
+                     {"hac_floor_applied", r.hac_fallback ? 1.0 : 0.0},
+                     {"fdj_recon_se_Nm", r.fdj_recon_se_nm},
+                     {"eta_o_recon_se", r.eta_o_recon_se},
+                     {"recon_weighted_windows", static_cast<double>(r.recon_weighted_windows)}};
     return h;
 }
 
