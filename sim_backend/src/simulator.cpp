@@ -8,7 +8,9 @@
 #include <cctype>
 #include <cmath>
 #include <random>
+#include <mutex>
 #include <thread>
+#include <exception>
 
 namespace emadiag::sim {
 
@@ -279,10 +281,13 @@ std::vector<SimResult> simulate_batch(const std::vector<SimConfig>& configs, uns
     }
     configs[0].params.validate();
     for (const auto& c : configs) c.params.validate();
+    (void)detail::make_shared(configs[0]);  // duration and step counts: throw here, not in a worker
     constexpr int W = kBatchLanes * kBatchGroups;
     const std::size_t groups = (configs.size() + W - 1) / W;
     std::atomic<std::size_t> next{0};
-    auto worker = [&] {
+    std::exception_ptr failure;
+    std::mutex failure_mutex;
+    auto work = [&] {
         std::vector<SimResult> pad(W);
         for (std::size_t g = next.fetch_add(1); g < groups; g = next.fetch_add(1)) {
             const SimConfig* cfg[W];
@@ -300,11 +305,21 @@ std::vector<SimResult> simulate_batch(const std::vector<SimConfig>& configs, uns
             run_group<kBatchLanes, kBatchGroups>(cfg, out);
         }
     };
+    auto worker = [&] {
+        try {
+            work();
+        } catch (...) {  // an exception must not leave a thread: keep the first, rethrow after the join
+            const std::lock_guard<std::mutex> lock(failure_mutex);
+            if (!failure) failure = std::current_exception();
+            next = groups;
+        }
+    };
     const unsigned n_threads = std::max(1u, std::min<unsigned>(threads, static_cast<unsigned>(groups)));
     std::vector<std::thread> pool;
     for (unsigned i = 1; i < n_threads; ++i) pool.emplace_back(worker);
     worker();
     for (auto& th : pool) th.join();
+    if (failure) std::rethrow_exception(failure);
     return results;
 }
 

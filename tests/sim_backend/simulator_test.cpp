@@ -92,6 +92,14 @@ TEST(Simulator, BatchRejectsConfigsThatDifferBeyondHealth) {
     EXPECT_THAT([&] { (void)simulate_batch(v); }, ThrowsMessage<SimError>(HasSubstr("params.r_ohm")));
 }
 
+TEST(Simulator, ABadBatchDurationIsAClearErrorOnTwoThreads) {
+    // Thrown before any worker thread starts (an exception escaping a thread would terminate).
+    std::vector<SimConfig> v(60);
+    for (auto& c : v) c.duration_s = 0.3098;
+    EXPECT_THAT([&] { (void)simulate_batch(v, 2); },
+                ThrowsMessage<SimError>(HasSubstr("duration of 0.309800 s is not a whole number")));
+}
+
 TEST(Simulator, SamplesFollowSection7TimeConvention) {
     const auto r = simulate(SimConfig{});
     ASSERT_EQ(r.samples.size(), 1000U);
