@@ -10,6 +10,7 @@
 #include <numbers>
 #include <optional>
 #include <tuple>
+#include <functional>
 
 namespace emadiag {
 namespace {
@@ -125,11 +126,72 @@ TrajectoryFit fit_trajectory(const Run& run, std::size_t a, std::size_t b, doubl
     return f;
 }
 
+/// Noisy data, after the move end: the position hold takes over (section 5) and brings the shaft
+/// to rest. For a candidate slip this is fixed by its speed at the move end and its dynamic
+/// friction, so the hold's first samples (speed, angle, and the current while the shaft still
+/// moves: I = K_w (K_theta (theta_cmd - theta) - w), which reads the speed 2.5 times finer than the
+/// speed channel) tell slips apart that the ramp alone cannot: a late, steep start ends faster than
+/// an early, slow one. Left out: the current of a resting shaft (its chatter sawtooth is not
+/// modelled) and the mean angle it rests at over the hold (that stopping distance is off by more
+/// than its 8e-5 rad precision: with it, the calibration bench's BRK intervals covered 89-91 %).
+struct PostMove {
+    std::size_t first = 0;           ///< first sample wholly after the move end
+    double sigma_w = 0, sigma_th = 0, sigma_i = 0, load_nm = 0;
+    int d = 0;
+    bool ok = false;
+};
+constexpr std::size_t kPostMoveMaxSamples = 16;
+constexpr double kPostMoveStepS = 5e-6;
+
+/// SSE and rows of the post-move samples for a slip ending at t_end with speed w_end, angle
+/// th_end and dynamic friction dyn_nm (magnitude).
+std::pair<double, std::size_t> post_move_sse(const Run& run, const PostMove& pm, double t_end, double w_end,
+                                             double th_end, double dyn_nm) {
+    const auto& s = run.samples;
+    const auto& c = run.constants;
+    const double period = c.sample_period_s;
+    double t = t_end, w = w_end, th = th_end, sse = 0;
+    std::size_t rows = 0, stuck_samples = 0;
+    bool stuck = false;
+    for (std::size_t k = pm.first; k < s.size() && k < pm.first + kPostMoveMaxSamples && stuck_samples < 2; ++k) {
+        const double t0 = s[k].t_s - period, t1 = s[k].t_s;
+        const double cmd_m = c.tau * s[k].command_deg * (std::numbers::pi / 180.0);
+        double sum_w = 0, sum_i = 0;
+        while (t < t1 - kTimeEpsS) {
+            const double h = std::min(kPostMoveStepS, t1 - t);
+            const double i_dem = kSpeedLoopGainAsPerRad * (kPositionLoopGainPerS * (cmd_m - th) - w);
+            if (!stuck) {
+                const double sgn = w > 0 ? 1.0 : -1.0;
+                const double w_new = w + h * (c.k_t_nm_per_a * i_dem - pm.load_nm - sgn * dyn_nm) / c.j_kgm2;
+                stuck = w_new * w <= 0;
+                w = stuck ? 0.0 : w_new;
+                th += h * w;
+            }
+            if (t >= t0 - kTimeEpsS) {
+                sum_w += h * w;
+                sum_i += h * i_dem;
+            }
+            t += h;
+        }
+        sse += std::pow((s[k].speed_rad_s - sum_w / period) / pm.sigma_w, 2) +
+               std::pow((s[k].theta_m_rad - th) / pm.sigma_th, 2);
+        rows += 2;
+        if (!stuck) {
+            sse += std::pow((s[k].current_a - sum_i / period) / pm.sigma_i, 2);
+            ++rows;
+        } else {
+            ++stuck_samples;
+        }
+    }
+    return {sse, rows};
+}
+
 /// Noisy data: the slip trajectory for a candidate t_b with the sequence's own end condition,
 /// theta(t_end) = theta0 + d kBrkMoveRad, which fixes g0; theta0 is the hold angle. SSE over the
 /// speeds and angles of samples [a, b].
 TrajectoryFit fit_trajectory_to_end(const Run& run, std::size_t a, std::size_t b, double t_b, double g1_nm_s,
-                                    double theta0_rad, double t_end_s, int d, double sigma_w, double sigma_th) {
+                                    double theta0_rad, double t_end_s, int d, double sigma_w, double sigma_th,
+                                    const PostMove& post, const std::function<double(double, double)>& dyn_at) {
     const double j = run.constants.j_kgm2;
     const double period = run.constants.sample_period_s;
     TrajectoryFit f;
@@ -147,6 +209,12 @@ TrajectoryFit fit_trajectory_to_end(const Run& run, std::size_t a, std::size_t b
     }
     f.sse = sse;
     f.rows = 2 * (b - a + 1);
+    if (post.ok) {
+        const double w_end = (f.g0_nm * span + g1_nm_s * span * span / 2) / j;
+        const auto [extra, rows] = post_move_sse(run, post, t_end_s, w_end, theta0_rad + angle(span), dyn_at(t_b, f.g0_nm));
+        f.sse += extra;
+        f.rows += rows;
+    }
     return f;
 }
 
@@ -279,11 +347,14 @@ std::optional<double> move_end_time(const Run& run, std::size_t from, double the
 /// its one-se half-width, and the whole profile for the posterior of step 5.
 using EndProfile = GridProfile;
 EndProfile profile_to_end(const Run& run, std::size_t a, std::size_t b, double t_lo, double t_hi, double g1_nm_s,
-                          double theta0_rad, double t_end_s, int d, double sigma_w, double sigma_th) {
+                          double theta0_rad, double t_end_s, int d, double sigma_w, double sigma_th, const PostMove& post,
+                          const std::function<double(double, double)>& dyn_at) {
     constexpr double kFittedParams = 2.0;
     return profile_grid(
         run, a, b, t_lo, t_hi,
-        [&](double t) { return fit_trajectory_to_end(run, a, b, t, g1_nm_s, theta0_rad, t_end_s, d, sigma_w, sigma_th); },
+        [&](double t) {
+            return fit_trajectory_to_end(run, a, b, t, g1_nm_s, theta0_rad, t_end_s, d, sigma_w, sigma_th, post, dyn_at);
+        },
         kFittedParams, true);
 }
 
@@ -538,7 +609,20 @@ BreakawayAnalysis analyse_breakaways(const Run& run) {
             const double span_max = dg1 > 0 ? std::cbrt(6 * kBrkMoveRad * c.j_kgm2 / dg1) : kTrajectoryWindowS;
             const double lo = std::max(s[a_traj].t_s - period, *t_end - span_max);
             const double hi_t = *t_end - period;
-            const auto ep = profile_to_end(run, a_traj, b_traj, lo, hi_t, g1, hold.theta_rad.mean, *t_end, d, sigma_w, sigma_th);
+            PostMove post;
+            post.first = e + 1;
+            post.d = d;
+            post.sigma_w = sigma_w;
+            post.sigma_th = sigma_th;
+            post.sigma_i = std::max(out.sigma_current_a, kMinCurrentForSweepA);
+            post.load_nm = fr_now;
+            post.ok = post.first < n;
+            // D_d for a candidate: the mean torque at t_b less the initial excess g0 (step 6).
+            const std::function<double(double, double)> dyn_for = [&](double t_b, double g0) {
+                return d * (c.k_t_nm_per_a * chatter_mean_current_a(ramp_demand(t_b), kBrkRampAPerS) - fr_line.at(t_b)) - d * g0;
+            };
+            const auto ep = profile_to_end(run, a_traj, b_traj, lo, hi_t, g1, hold.theta_rad.mean, *t_end, d, sigma_w,
+                                           sigma_th, post, dyn_for);
             if (!ep.best.ok) {
                 out.problems.push_back("the " + dname + " slip trajectory could not be fitted");
                 break;

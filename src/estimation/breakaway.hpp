@@ -22,7 +22,10 @@
 //       the start angle is the hold angle and the sequence's end condition (the shaft has moved
 //       kBrkMoveRad at the ramp end, timed from the current's switch to the hold demand inside
 //       its sample) fixes g0, so t_b is the only unknown. Speeds are period means, angles
-//       end-of-period values.
+//       end-of-period values. The fit goes on past the move end: the position hold brings the
+//       shaft to rest from the slip's end speed against its dynamic friction, and the hold's
+//       first samples (speed, angle, and the current while the shaft moves, which reads the
+//       speed through the speed loop) tell a late, steep slip from an early, slow one.
 //  3. I_ref(t) = I_start + d ramp_rate (t - t_start): I_start is the hold demand from the
 //     controller law (theta measured, w = 0), t_start the sequence's ramp start (the second ramp:
 //     100 ms after the move end of the first). The ramp end is found where the sample-mean
