@@ -141,7 +141,7 @@ struct PostMove {
     bool ok = false;
 };
 constexpr std::size_t kPostMoveMaxSamples = 16;
-constexpr double kPostMoveStepS = 5e-6;
+constexpr double kPostMoveStepS = 2e-5;
 
 /// SSE and rows of the post-move samples for a slip ending at t_end with speed w_end, angle
 /// th_end and dynamic friction dyn_nm (magnitude).
