@@ -25,12 +25,12 @@ constexpr double kHingeFitS = 0.02;
 constexpr std::size_t kMinRampSamples = 4;
 constexpr double kSlipSpeedFraction = 0.3;
 constexpr double kUniformSdFactor = 0.28867513459481287;  // 1/sqrt(12)
-constexpr int kStickSlipPieces = 40;
+constexpr int kStickSlipPieces = 40;  // components standing for the uniform stick-slip segment
 constexpr double kNinetyFiveZ = 1.959963984540054;
 // Share of the chatter-beat shortfall taken as the sd of the slip onset's model error (step 6,
 // noisy data). Tuned once on calibration_bench seed 11 (mean (err/se)^2 of BRK FDJ = 1.0 in
 // case B, 1.1 in case A) and reported on seed 7.
-constexpr double kOnsetModelShare = 0.1;  // components standing for the uniform stick-slip segment
+constexpr double kOnsetModelShare = 0.1;
 
 struct Stats {
     double mean = 0, sd = 0;
@@ -137,7 +137,6 @@ TrajectoryFit fit_trajectory(const Run& run, std::size_t a, std::size_t b, doubl
 struct PostMove {
     std::size_t first = 0;           ///< first sample wholly after the move end
     double sigma_w = 0, sigma_th = 0, sigma_i = 0, load_nm = 0;
-    int d = 0;
     bool ok = false;
 };
 constexpr std::size_t kPostMoveMaxSamples = 16;
@@ -611,7 +610,6 @@ BreakawayAnalysis analyse_breakaways(const Run& run) {
             const double hi_t = *t_end - period;
             PostMove post;
             post.first = e + 1;
-            post.d = d;
             post.sigma_w = sigma_w;
             post.sigma_th = sigma_th;
             post.sigma_i = std::max(out.sigma_current_a, kMinCurrentForSweepA);
@@ -732,10 +730,11 @@ BreakawayAnalysis analyse_breakaways(const Run& run) {
             ev.threshold_se_nm = sd;
         }
 
-        // 6. Dynamic friction over the fully slipping samples: from the first sample two after one
-        // that already runs at kSlipSpeedFraction of the final ramp speed (past any
+        // 6. Clean data: dynamic friction over the fully slipping samples, from the first sample two
+        // after one that already runs at kSlipSpeedFraction of the final ramp speed (past any
         // stick-slip), to the last full ramp sample but one (the telescoped mean needs w[last+1]).
-        if (e >= kb + 4 + kMinSlipSamples) {
+        // Noisy data have it from the slip trajectory's posterior (dynamic_posterior) instead.
+        if (out.clean && e >= kb + 4 + kMinSlipSamples) {
             const double w_final = d * s[e - 1].speed_rad_s;
             // The test looks at w[first - 2], which the telescoped mean does not use, so that
             // picking the start does not select the noise of the speeds it uses.
@@ -749,18 +748,15 @@ BreakawayAnalysis analyse_breakaways(const Run& run) {
                 const double se_j = c.j_kgm2 * out.sigma_speed_rad_s / (period * cnt);
                 const double se_i = c.k_t_nm_per_a * out.sigma_current_a / std::sqrt(cnt);
                 const double se_h = out.sigma_hinge_nm / c.tau / std::sqrt(cnt);
-                double se_model = 0;
-                if (out.clean) {
-                    // The telescoped ends take w at a period boundary as the mean of the two period
-                    // means around it, exact for a smooth speed; but the chatter's beat modulates
-                    // the motor torque (the sample-mean current wanders about its trend), which
-                    // bends the speed between the means. Each end is off by about one period of
-                    // that torque deviation, J dw ~ k_t dI T, over the window of cnt periods.
-                    std::vector<double> ti, ii;
-                    for (std::size_t k = first; k <= last; ++k) { ti.push_back(s[k].t_s); ii.push_back(s[k].current_a); }
-                    const double wander_a = fit_line(ti, ii).sigma;
-                    se_model = c.k_t_nm_per_a * wander_a / cnt;  // both ends together, measured on 100 seeded runs
-                }
+                // The telescoped ends take w at a period boundary as the mean of the two period
+                // means around it, exact for a smooth speed; but the chatter's beat modulates the
+                // motor torque (the sample-mean current wanders about its trend), which bends the
+                // speed between the means. Each end is off by about one period of that torque
+                // deviation, J dw ~ k_t dI T, over the window of cnt periods.
+                std::vector<double> ti, ii;
+                for (std::size_t k = first; k <= last; ++k) { ti.push_back(s[k].t_s); ii.push_back(s[k].current_a); }
+                const double wander_a = fit_line(ti, ii).sigma;
+                const double se_model = c.k_t_nm_per_a * wander_a / cnt;  // both ends together, measured on 100 seeded runs
                 ev.dynamic_friction_se_nm = std::sqrt(se_j * se_j + se_i * se_i + se_h * se_h + se_model * se_model);
             }
         }

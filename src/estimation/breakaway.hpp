@@ -41,11 +41,12 @@
 //     invisibly in noisy means, so the posterior also spreads uniformly over
 //     [S(g0 = 0) - k_t u, S(g0 = 0)] with the likelihood of the zero-acceleration start. S_d is
 //     its mean. The estimator multiplies the two directions' posteriors (product_posterior).
-//  6. Also the dynamic friction D_d = FDJ + c(d)|F_R| from the telescoped mean T_R over the fully
-//     slipping samples (from two samples after one at 30 % of the final ramp speed, past any
-//     stick-slip, to the ramp end), when there are at least kMinSlipSamples; on clean data its
-//     se includes the chatter beat's wander of the mean current (it bends the speed between the
-//     period means that stand for the window's end speeds).
+//  6. Also the dynamic friction D_d = FDJ + c(d)|F_R|. Clean data: the telescoped mean T_R over
+//     the fully slipping samples (from two samples after one at 30 % of the final ramp speed, past
+//     any stick-slip, to the ramp end), when there are at least kMinSlipSamples; its se includes
+//     the chatter beat's wander of the mean current (it bends the speed between the period means
+//     that stand for the window's end speeds). Noisy data: the posterior of step 5's slip
+//     trajectories mapped to D_d = d (k_t I_mean(t_b) - F_R) - d g0 (dynamic_posterior).
 #include "core/run.hpp"
 #include "estimation/dataset.hpp"
 #include "emadiag/sim/simulator.hpp"
@@ -94,7 +95,7 @@ struct BreakawayEvent {
     double load_torque_nm = 0, load_torque_se_nm = 0;  ///< F_R at t_b (signed)
     double threshold_nm = 0, threshold_se_nm = 0;      ///< S_d = FSJ + c(d)|F_R|
     double slip_accel_torque_nm = 0;                   ///< fitted g0 (J dw/dt just after t_b)
-    std::optional<double> dynamic_friction_nm;         ///< D_d = FDJ + c(d)|F_R|
+    std::optional<double> dynamic_friction_nm;         ///< clean data: D_d = FDJ + c(d)|F_R| (step 6)
     double dynamic_friction_se_nm = 0;
     std::size_t slip_samples = 0;
     double t_move_end_s = 0;            ///< when the shaft had moved kBrkMoveRad (ramp end)
