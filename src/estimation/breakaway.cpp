@@ -2,6 +2,7 @@
 
 #include "core/emadiag_error.hpp"
 #include "core/residual_torque.hpp"
+#include "estimation/health_estimate.hpp"
 #include "estimation/physics_friction_law.hpp"
 
 #include <algorithm>
@@ -26,7 +27,6 @@ constexpr std::size_t kMinRampSamples = 4;
 constexpr double kSlipSpeedFraction = 0.3;
 constexpr double kUniformSdFactor = 0.28867513459481287;  // 1/sqrt(12)
 constexpr int kStickSlipPieces = 40;  // components standing for the uniform stick-slip segment
-constexpr double kNinetyFiveZ = 1.959963984540054;
 // Share of the chatter-beat shortfall taken as the sd of the slip onset's model error (step 6,
 // noisy data). Tuned once on calibration_bench seed 11 (mean (err/se)^2 of BRK FDJ = 1.0 in
 // case B, 1.1 in case A) and reported on seed 7.
@@ -483,7 +483,7 @@ PosteriorSummary product_posterior(const std::vector<std::vector<MixtureComponen
         const double h = 0.5 * (h_lo + h_hi);
         (mass_within(h) >= kMass ? h_hi : h_lo) = h;
     }
-    out.se95 = std::max(h_hi, step) / kNinetyFiveZ;
+    out.se95 = std::max(h_hi, step) / kZ95;
     return out;
 }
 

@@ -15,6 +15,9 @@ inline constexpr const char* kParamFsj = "FSJ_Nm";
 inline constexpr const char* kParamEtaO = "eta_O";
 inline constexpr const char* kParamEtaA = "eta_A";
 
+/// Two-sided 95 % normal quantile: a parameter's 95 % interval is value +/- kZ95 std_error.
+inline constexpr double kZ95 = 1.959963984540054;
+
 struct ParameterEstimate {
     std::string name;              ///< one of kParam*
     std::optional<double> value;   ///< empty when not identifiable or not estimated

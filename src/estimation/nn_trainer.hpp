@@ -3,6 +3,7 @@
 // SCG with early stopping, the normalised MSE figures of the paper's tables, and the calibration
 // of the per-output uncertainty on held-out (validation) runs.
 #include "estimation/dataset.hpp"
+#include "estimation/health_estimate.hpp"
 #include "estimation/network_model.hpp"
 #include "estimation/scg.hpp"
 
@@ -50,8 +51,7 @@ struct TrainReport {
 };
 
 /// Quantile level used for the calibrated half-width: the 95 % two-sided interval.
-inline constexpr double kCoverageLevel = 0.95;
-inline constexpr double kZ95 = 1.959963984540054;
+inline constexpr double kCoverageLevel = 0.95;  // half-width = kZ95 (health_estimate.hpp) std_error
 
 /// Trains and calibrates. Throws EmadiagError when there are too few runs for the split.
 [[nodiscard]] TrainReport train_network(const FeatureSet& features, const TrainOptions& options);

@@ -3,6 +3,7 @@
 #include "core/emadiag_error.hpp"
 #include "core/sim_run.hpp"
 #include "estimation/dataset.hpp"
+#include "estimation/health_estimate.hpp"
 #include "estimation/physics_estimator.hpp"
 #include "estimation/physics_friction_law.hpp"
 
@@ -16,7 +17,6 @@
 
 namespace emadiag {
 namespace {
-constexpr double kNinetyFive = 1.959963984540054;
 constexpr std::uint64_t kNoiseSeedStride = 1000003;
 constexpr double kCaseAHingeNm = 5.0;  // ema-reference.md section 4
 constexpr double kOnePercent = 0.01, kThreePercent = 0.03;
@@ -69,7 +69,7 @@ CalibrationResult evaluate_physics(const CalibrationSpec& spec) {
             const double err = *p.value - truth;
             const HealthRange range = health_range(p.name);
             ++s.estimated;
-            s.covered += std::abs(err) <= kNinetyFive * p.std_error ? 1 : 0;
+            s.covered += std::abs(err) <= kZ95 * p.std_error ? 1 : 0;
             s.mse_normalised += std::pow(err / (range.hi - range.lo), 2);
             s.max_rel_error = std::max(s.max_rel_error, std::abs(err) / std::abs(truth));
             s.mean_rel_error += std::abs(err) / std::abs(truth);

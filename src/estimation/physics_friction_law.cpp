@@ -1,6 +1,7 @@
 #include "estimation/physics_friction_law.hpp"
 
 #include "emadiag/sim/ema_params.hpp"
+#include "estimation/health_estimate.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +9,6 @@
 
 namespace emadiag {
 namespace {
-constexpr double kNinetyFiveQuantile = 1.959963984540054;
 constexpr double kCoveredFraction = 0.95;
 constexpr double kNegligibleFraction = 1e-6;  // one part is negligible: use the other's exact limit
 constexpr int kBisectionSteps = 60;
@@ -42,7 +42,7 @@ LoadCoefficientPrior load_coefficient_prior(double tau) {
     return p;
 }
 
-double uniform_equivalent_se(double half_width) { return kCoveredFraction * half_width / kNinetyFiveQuantile; }
+double uniform_equivalent_se(double half_width) { return kCoveredFraction * half_width / kZ95; }
 
 double uniform_plus_gaussian_se(double half_width, double gaussian_se) {
     const double h = std::abs(half_width), sigma = std::abs(gaussian_se);
@@ -59,12 +59,12 @@ double uniform_plus_gaussian_se(double half_width, double gaussian_se) {
                 phi_antiderivative((h - q) / sigma) + phi_antiderivative(-(q + h) / sigma));
     };
     // coverage is increasing in q; the 95 % point lies in [0, h + 1.96 sigma].
-    double lo = 0.0, hi = h + kNinetyFiveQuantile * sigma;
+    double lo = 0.0, hi = h + kZ95 * sigma;
     for (int it = 0; it < kBisectionSteps; ++it) {
         const double mid = 0.5 * (lo + hi);
         (coverage(mid) < kCoveredFraction ? lo : hi) = mid;
     }
-    return 0.5 * (lo + hi) / kNinetyFiveQuantile;
+    return 0.5 * (lo + hi) / kZ95;
 }
 
 }  // namespace emadiag

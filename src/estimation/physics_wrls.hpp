@@ -58,6 +58,7 @@
 //    fourth-order stencil over-corrects (the difference is then an error bound, not an error).
 //    At the two ends of the run the fourth-order stencil is shifted inwards by one sample.
 #include "core/run.hpp"
+#include "estimation/health_estimate.hpp"
 
 #include <cstddef>
 #include <optional>
@@ -81,7 +82,7 @@ inline constexpr double kMinHacFraction = 0.1;
 inline constexpr int kMaxIterations = 30;
 /// Step 6b: the embedded reconstruction-error estimate D is the half-width of a 95 % interval,
 /// se_model = |D| / kReconErrorZ (the two-sided 95 % normal quantile).
-inline constexpr double kReconErrorZ = 1.959963984540054;
+inline constexpr double kReconErrorZ = kZ95;
 
 struct SlipWindow {
     std::size_t first = 0, last = 0;  ///< sample indices, inclusive
