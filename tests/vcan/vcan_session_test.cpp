@@ -8,6 +8,7 @@
 #include "emadiag/can/ema_icd.hpp"
 #include "emadiag/can/socketcan_bus.hpp"
 #include "emadiag/sim/simulator.hpp"
+#include "support/samples_within_resolution.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -146,29 +147,6 @@ public:
     std::string dir_;
 };
 
-::testing::AssertionResult matches_simulation(const Run& got, const sim::SimResult& want) {
-    if (got.samples.size() != want.samples.size())
-        return ::testing::AssertionFailure() << got.samples.size() << " samples, direct simulation has " << want.samples.size();
-    constexpr double kSlack = 1e-9;
-    const double lim[] = {1e-12, sim::kCurrentResolutionA / 2, sim::kSpeedResolutionRadS / 2, sim::kThetaResolutionRad / 2,
-                          sim::kHingeResolutionNm / 2, 1e-9};
-    double worst[6] = {0, 0, 0, 0, 0, 0};
-    for (std::size_t k = 0; k < got.samples.size(); ++k) {
-        const auto& g = got.samples[k];
-        const auto& w = want.samples[k];
-        const double d[] = {std::abs(g.t_s - w.t_s), std::abs(g.current_a - w.current_a), std::abs(g.speed_rad_s - w.speed_rad_s),
-                            std::abs(g.theta_m_rad - w.theta_m_rad), std::abs(g.hinge_moment_nm - w.hinge_moment_nm),
-                            std::abs(g.command_deg - w.command_deg)};
-        for (int i = 0; i < 6; ++i) {
-            worst[i] = std::max(worst[i], d[i]);
-            if (d[i] > lim[i] + kSlack)
-                return ::testing::AssertionFailure() << "sample " << k << " column " << i << " differs by " << d[i] << " > " << lim[i];
-        }
-    }
-    std::cout << "  largest differences: current " << worst[1] << " A, speed " << worst[2] << " rad/s, theta " << worst[3]
-              << " rad, hinge " << worst[4] << " N m\n";
-    return ::testing::AssertionSuccess();
-}
 
 void check_session(Vcan& t, const std::string& seq, sim::Sequence sseq, const std::string& stem, const std::string& noise) {
     auto ema = t.start_ema({"--case", "B", "--noise", noise, "--seed", "31"}, "ema");
@@ -189,7 +167,7 @@ void check_session(Vcan& t, const std::string& seq, sim::Sequence sseq, const st
     direct.noise = sim::parse_noise(noise);
     direct.seed = 31;
     direct.sequence = sseq;
-    EXPECT_TRUE(matches_simulation(run, sim::simulate(direct)));
+    EXPECT_TRUE(test::samples_within_resolution(run, sim::simulate(direct), &std::cout));
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 #include "emadiag/can/ema_icd.hpp"
 #include "emadiag/can/memory_bus.hpp"
 #include "emadiag/node/ema_node.hpp"
+#include "support/node_runner.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -14,25 +15,7 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-/// The node serving its own MemoryBus in a thread.
-class NodeRunner {
-public:
-    NodeRunner(MemoryBusHub& hub, node::EmaNodeConfig cfg) : bus_(hub, "ema"), node_(bus_, std::move(cfg)) {
-        thread_ = std::thread([this] { node_.run(stop_); });
-    }
-    ~NodeRunner() { stop(); }
-    void stop() {
-        stop_ = true;
-        if (thread_.joinable()) thread_.join();
-    }
-    const node::EmaNodeStats& stats() const { return node_.stats(); }
-
-private:
-    MemoryBus bus_;
-    node::EmaNode node_;
-    std::atomic<bool> stop_{false};
-    std::thread thread_;
-};
+using test::NodeRunner;
 
 node::EmaNodeConfig base_config() {
     node::EmaNodeConfig c;

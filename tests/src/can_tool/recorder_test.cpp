@@ -7,6 +7,8 @@
 #include "core/sim_run.hpp"
 #include "emadiag/can/memory_bus.hpp"
 #include "emadiag/node/ema_node.hpp"
+#include "support/node_runner.hpp"
+#include "support/samples_within_resolution.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -20,24 +22,8 @@ using ::testing::HasSubstr;
 
 namespace {
 
-class NodeRunner {
-public:
-    NodeRunner(can::MemoryBusHub& hub, node::EmaNodeConfig cfg) : bus_(hub, "ema"), node_(bus_, std::move(cfg)) {
-        thread_ = std::thread([this] { node_.run(stop_); });
-    }
-    ~NodeRunner() { stop(); }
-    void stop() {
-        stop_ = true;
-        if (thread_.joinable()) thread_.join();
-    }
-    const node::EmaNodeStats& stats() const { return node_.stats(); }
-
-private:
-    can::MemoryBus bus_;
-    node::EmaNode node_;
-    std::atomic<bool> stop_{false};
-    std::thread thread_;
-};
+using test::NodeRunner;
+using test::samples_within_resolution;
 
 node::EmaNodeConfig config(sim::Sequence seq, std::uint64_t seed) {
     node::EmaNodeConfig c;
@@ -50,24 +36,6 @@ node::EmaNodeConfig config(sim::Sequence seq, std::uint64_t seed) {
 
 std::string out_path(const std::string& name) { return std::string(EMADIAG_BINARY_DIR) + "/recorder_test_" + name + ".log"; }
 
-::testing::AssertionResult within_resolution(const Run& got, const sim::SimResult& want) {
-    if (got.samples.size() != want.samples.size())
-        return ::testing::AssertionFailure() << got.samples.size() << " samples, simulation has " << want.samples.size();
-    constexpr double kSlack = 1e-9;
-    for (std::size_t k = 0; k < got.samples.size(); ++k) {
-        const auto& g = got.samples[k];
-        const auto& w = want.samples[k];
-        const double d[] = {std::abs(g.t_s - w.t_s), std::abs(g.current_a - w.current_a), std::abs(g.speed_rad_s - w.speed_rad_s),
-                            std::abs(g.theta_m_rad - w.theta_m_rad), std::abs(g.hinge_moment_nm - w.hinge_moment_nm),
-                            std::abs(g.command_deg - w.command_deg)};
-        const double lim[] = {1e-12, sim::kCurrentResolutionA / 2, sim::kSpeedResolutionRadS / 2, sim::kThetaResolutionRad / 2,
-                              sim::kHingeResolutionNm / 2, 1e-9};
-        for (int i = 0; i < 6; ++i)
-            if (d[i] > lim[i] + kSlack)
-                return ::testing::AssertionFailure() << "sample " << k << " column " << i << " differs by " << d[i] << " > " << lim[i];
-    }
-    return ::testing::AssertionSuccess();
-}
 
 }  // namespace
 
@@ -93,7 +61,7 @@ TEST(Recorder, DynRunMatchesDirectSimulationAndTheLogDecodesToTheSameRun) {
     EXPECT_EQ(out.run.constants.tau, 800.0);
 
     sim::SimConfig direct = config(sim::Sequence::Dyn, 42).sim;
-    EXPECT_TRUE(within_resolution(out.run, sim::simulate(direct)));
+    EXPECT_TRUE(samples_within_resolution(out.run, sim::simulate(direct)));
 
     const emadiag::Run from_log = read_run_candump(ro.log_path);
     ASSERT_EQ(from_log.samples.size(), out.run.samples.size());
