@@ -63,14 +63,15 @@ using sim::kBrkFirstHoldS;
 inline constexpr double kBrkHoldS = sim::kBrkMidHoldS;
 using sim::kBrkRampAPerS;
 using sim::kBrkMoveRad;
-/// Section 1, the drive, for the chatter step of the section-5 note.
-inline constexpr double kDriveSupplyV = 270.0;
-inline constexpr double kStatorResistanceOhm = 1.0;
-inline constexpr double kStatorInductanceH = 2.5e-3;
-inline constexpr double kCurrentLoopStepS = 1e-6;
+/// Section 1, the drive, for the chatter step of the section-5 note: the datasheet's values, as
+/// the simulator's defaults hold them (a BRK run's header does not carry them).
+inline constexpr double kDriveSupplyV = sim::EmaParams{}.v_dc_v;
+inline constexpr double kStatorResistanceOhm = sim::EmaParams{}.r_ohm;
+inline constexpr double kStatorInductanceH = sim::EmaParams{}.l_h;
+inline constexpr double kCurrentLoopStepS = sim::EmaParams{}.dt_s;
 /// Section 1, the controller: I_ref = K_w (K_theta (theta_cmd_m - theta_m) - w).
-inline constexpr double kPositionLoopGainPerS = 30.0;
-inline constexpr double kSpeedLoopGainAsPerRad = 0.25;
+inline constexpr double kPositionLoopGainPerS = sim::EmaParams{}.k_theta_per_s;
+inline constexpr double kSpeedLoopGainAsPerRad = sim::EmaParams{}.k_w_a_s_per_rad;
 /// A drop of the current below the ramp line by this much marks the ramp end (hold takes over).
 inline constexpr double kRampEndDropA = 0.15;
 /// Fewest fully slipping samples for a dynamic-friction value from a breakaway slip.

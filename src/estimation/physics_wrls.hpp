@@ -58,6 +58,7 @@
 //    fourth-order stencil over-corrects (the difference is then an error bound, not an error).
 //    At the two ends of the run the fourth-order stencil is shifted inwards by one sample.
 #include "core/run.hpp"
+#include "emadiag/sim/ema_params.hpp"
 #include "estimation/health_estimate.hpp"
 
 #include <cstddef>
@@ -69,7 +70,7 @@ namespace emadiag {
 
 inline constexpr double kMinSlipSpeedRadS = 20.0;
 /// ema-reference.md section 1: motor torque saturation (not among the Run constants).
-inline constexpr double kTorqueLimitNm = 4.0;
+inline constexpr double kTorqueLimitNm = sim::EmaParams{}.t_max_nm;
 /// Chatter (0.108 A, section 5) plus margin, as torque: samples closer to T_max are not used.
 inline constexpr double kTorqueLimitMarginNm = 0.1;
 inline constexpr std::size_t kWindowSamples = 8;
