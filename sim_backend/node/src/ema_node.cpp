@@ -271,8 +271,6 @@ void EmaNode::stream_due(Clock::time_point now) {
         const auto due = r.stream_start + std::chrono::duration_cast<Clock::duration>(
                                               std::chrono::duration<double>(static_cast<double>(r.next + 1) * period_s));
         if (due > now) return;
-        // A pass that woke late sends a burst of due samples: the watchdog is checked before each.
-        if (watchdog_expired()) return;
         if (r.next == r.silent_at && !silent_) {
             event("going silent at sample " + std::to_string(r.next) + " (fault injection)");
             silent_ = true;
@@ -291,6 +289,9 @@ void EmaNode::stream_due(Clock::time_point now) {
         r.counter_b = static_cast<std::uint8_t>((r.counter_b + 1) % can::icd::kCounterModulo);
         std::uniform_real_distribution<double> u(0.0, 1.0);  // only compared against fractions
         for (can::CanFrame* f : {&a, &b}) {
+            // The watchdog is checked before every frame, not once per sample: a process descheduled
+            // between a passing check and its write can then leak one late frame, never a burst.
+            if (watchdog_expired()) return;
             // Two draws per frame, always, so the fault pattern depends only on the seed.
             const bool corrupt = config_.faults.corrupt_crc_fraction > 0 && u(fault_rng_) < config_.faults.corrupt_crc_fraction;
             const bool drop = config_.faults.drop_fraction > 0 && u(fault_rng_) < config_.faults.drop_fraction;
