@@ -34,7 +34,6 @@ namespace {
 
 /// Version of the --json schema (docs/estimate-json.md).
 constexpr int kEstimateJsonVersion = 1;
-constexpr double kNinetyFiveQuantile = 1.96;
 
 bool ends_with(const std::string& s, const std::string& suffix) {
     return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
@@ -134,8 +133,8 @@ void print_text(std::ostream& os, const std::string& path, const Run& run, const
         for (const auto& p : h.parameters) {
             os << "  " << std::left << std::setw(7) << p.name << ' ';
             if (p.value) {
-                const double lo = *p.value - kNinetyFiveQuantile * p.std_error;
-                const double hi = *p.value + kNinetyFiveQuantile * p.std_error;
+                const double lo = *p.value - kZ95 * p.std_error;
+                const double hi = *p.value + kZ95 * p.std_error;
                 os << std::setw(11) << fmt(*p.value, 6) << " +/- " << std::setw(10) << fmt(p.std_error, 3)
                    << " (1 se; 95 % [" << fmt(lo, 6) << ", " << fmt(hi, 6) << "])  [" << p.method << "]";
             } else {
@@ -162,7 +161,7 @@ void print_text(std::ostream& os, const std::string& path, const Run& run, const
             const double se = std::hypot(p.std_error, q->std_error);
             const double z = se > 0 ? std::abs(*p.value - *q->value) / se : 0.0;
             os << "  " << std::left << std::setw(7) << p.name << ' ' << fmt(z, 3)
-               << (z <= kNinetyFiveQuantile ? "  agree" : "  DISAGREE") << '\n';
+               << (z <= kZ95 ? "  agree" : "  DISAGREE") << '\n';
         }
     }
 }
@@ -182,8 +181,8 @@ nlohmann::json to_json(const std::string& path, const Run& run, const Outcome& o
             q["name"] = p.name;
             q["value"] = p.value ? nlohmann::json(*p.value) : nlohmann::json(nullptr);
             q["std_error"] = p.value ? nlohmann::json(p.std_error) : nlohmann::json(nullptr);
-            q["ci95"] = p.value ? nlohmann::json::array({*p.value - kNinetyFiveQuantile * p.std_error,
-                                                         *p.value + kNinetyFiveQuantile * p.std_error})
+            q["ci95"] = p.value ? nlohmann::json::array({*p.value - kZ95 * p.std_error,
+                                                         *p.value + kZ95 * p.std_error})
                                 : nlohmann::json(nullptr);
             q["identifiable"] = p.identifiable;
             q["method"] = p.method;
