@@ -5,18 +5,10 @@
 #include "cli/command.hpp"
 #include "core/emadiag_error.hpp"
 #include "core/run_csv.hpp"
-#include "estimation/health_estimate.hpp"
-#include "estimation/physics_estimator.hpp"
-#include "estimation/run_checks.hpp"
-
-#if __has_include("estimation/network_model.hpp")
-#include "estimation/network_model.hpp"
-#define EMADIAG_HAVE_NETWORK 1
-#endif
-#if __has_include("can_tool/candump_run.hpp")
 #include "can_tool/candump_run.hpp"
-#define EMADIAG_HAVE_CANDUMP 1
-#endif
+#include "estimation/health_estimate.hpp"
+#include "estimation/run_checks.hpp"
+#include "estimation/run_estimator.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -40,14 +32,7 @@ bool ends_with(const std::string& s, const std::string& suffix) {
 }
 
 Run read_run_any(const std::string& path) {
-    if (ends_with(path, ".log")) {
-#ifdef EMADIAG_HAVE_CANDUMP
-        return read_run_candump(path);
-#else
-        throw EmadiagError(path + ": candump (.log) runs need the CAN run reader (can_tool/candump_run.hpp), "
-                                  "which this build does not have; convert the run to CSV");
-#endif
-    }
+    if (ends_with(path, ".log")) return read_run_candump(path);
     if (!ends_with(path, ".csv")) {
         throw EmadiagError(path + ": unknown run format; expected RUN.csv (run CSV) or RUN.log (candump)");
     }
@@ -68,56 +53,6 @@ std::optional<int> first_data_line(const std::string& path) {
     return std::nullopt;
 }
 
-/// Where shipped models are looked for: $EMADIAG_MODELS_DIR, ./models, <exe>/../models, <exe>/../../models.
-std::vector<std::filesystem::path> model_dirs() {
-    std::vector<std::filesystem::path> dirs;
-    if (const char* env = std::getenv("EMADIAG_MODELS_DIR")) dirs.emplace_back(env);
-    dirs.emplace_back("models");
-    std::error_code ec;
-    const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-    if (!ec) {
-        dirs.push_back(exe.parent_path().parent_path() / "models");
-        dirs.push_back(exe.parent_path().parent_path().parent_path() / "models");
-    }
-    return dirs;
-}
-
-struct Outcome {
-    std::vector<HealthEstimate> estimates;
-    std::vector<std::string> model_files;
-    std::vector<std::string> notes;
-};
-
-#ifdef EMADIAG_HAVE_NETWORK
-/// A shipped model for the run's case and sequence, if any. Among several, the one trained on the
-/// run's noise profile (its `noise` header, which simulated runs carry), else on `typical` noise:
-/// measured runs are never noise-free, and a model trained without noise is over-confident on them.
-std::optional<std::string> shipped_model_for(const Run& run, std::vector<std::string>& notes) {
-    const std::string wanted_noise = run.meta_value("noise").value_or("typical");
-    for (const auto& dir : model_dirs()) {
-        std::error_code ec;
-        if (!std::filesystem::is_directory(dir, ec)) continue;
-        std::vector<std::filesystem::path> files;
-        for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
-            if (entry.path().extension() == ".json") files.push_back(entry.path());
-        }
-        std::sort(files.begin(), files.end());
-        std::optional<std::string> first_match;
-        for (const auto& f : files) {
-            try {
-                const NetworkModel m = NetworkModel::load(f.string());
-                if (m.spec.load_case != run.load_case || m.spec.sequence != run.sequence) continue;
-                if (!first_match) first_match = f.string();
-                if (m.training.is_object() && m.training.value("noise", std::string{}) == wanted_noise) return f.string();
-            } catch (const std::exception& e) {
-                notes.push_back("skipped " + f.string() + ": " + e.what());
-            }
-        }
-        return first_match;  // the first models/ directory found is the one that counts
-    }
-    return std::nullopt;
-}
-#endif
 
 std::string fmt(double v, int digits) {
     std::ostringstream os;
@@ -125,7 +60,7 @@ std::string fmt(double v, int digits) {
     return os.str();
 }
 
-void print_text(std::ostream& os, const std::string& path, const Run& run, const Outcome& out) {
+void print_text(std::ostream& os, const std::string& path, const Run& run, const RunEstimates& out) {
     os << "run " << path << ": case " << run.load_case << ", sequence " << run.sequence << ", "
        << run.samples.size() << " samples\n";
     for (const auto& h : out.estimates) {
@@ -156,17 +91,15 @@ void print_text(std::ostream& os, const std::string& path, const Run& run, const
     if (out.estimates.size() == 2) {
         os << "\nagreement (|difference| / combined se):\n";
         for (const auto& p : out.estimates[0].parameters) {
-            const auto* q = out.estimates[1].find(p.name);
-            if (!q || !p.value || !q->value) continue;
-            const double se = std::hypot(p.std_error, q->std_error);
-            const double z = se > 0 ? std::abs(*p.value - *q->value) / se : 0.0;
-            os << "  " << std::left << std::setw(7) << p.name << ' ' << fmt(z, 3)
-               << (z <= kZ95 ? "  agree" : "  DISAGREE") << '\n';
+            const auto z = agreement_z(out.estimates[0], out.estimates[1], p.name);
+            if (!z) continue;
+            os << "  " << std::left << std::setw(7) << p.name << ' ' << fmt(*z, 3)
+               << (*z <= kZ95 ? "  agree" : "  DISAGREE") << '\n';
         }
     }
 }
 
-nlohmann::json to_json(const std::string& path, const Run& run, const Outcome& out) {
+nlohmann::json to_json(const std::string& path, const Run& run, const RunEstimates& out) {
     nlohmann::json j;
     j["schema"] = "emadiag-estimate";
     j["version"] = kEstimateJsonVersion;
@@ -222,22 +155,7 @@ const bool registered = register_command(Command{
                                          std::to_string(*line) + ", so sample row N is line N + " +
                                          std::to_string(*line - 1) + ")");
             }
-            Outcome out;
-            out.estimates.push_back(estimate_physics(run));
-#ifdef EMADIAG_HAVE_NETWORK
-            std::optional<std::string> mfile;
-            if (!model->empty()) mfile = *model; else mfile = shipped_model_for(run, out.notes);
-            if (mfile) {
-                const NetworkModel m = NetworkModel::load(*mfile);
-                out.estimates.push_back(m.estimate(run));
-                out.model_files.push_back(*mfile);
-            } else {
-                out.notes.push_back("no network model for case " + run.load_case + ", sequence " + run.sequence +
-                                    " (give --model FILE); physics estimator only");
-            }
-#else
-            if (!model->empty()) throw EmadiagError("--model: this build has no network estimator");
-#endif
+            const RunEstimates out = estimate_run(run, model->empty() ? std::nullopt : std::optional<std::string>(*model));
             if (*json) std::cout << to_json(*path, run, out).dump(2) << '\n';
             else print_text(std::cout, *path, run, out);
             return 0;
