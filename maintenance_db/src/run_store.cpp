@@ -2,75 +2,100 @@
 
 #include "emadiag/db/db_error.hpp"
 
+#include "run_store_detail.hpp"
+
+#include <sqlite3.h>
+
 #include <cctype>
 #include <cmath>
+#include <utility>
 
 namespace emadiag::db {
 
 namespace {
 constexpr std::size_t kMaxTailNumberLength = 16;
 
-void check_finite(double v, const std::string& field) {
-    if (!std::isfinite(v)) throw DbError("run field " + field + " is not a finite number");
+void check_finite(double v, const std::string& field, const std::string& context) {
+    if (!std::isfinite(v)) throw DbError(context + "run field " + field + " is not a finite number (" + std::to_string(v) + ")");
 }
 }  // namespace
 
-void check_tail_number(const std::string& tail_number) {
+namespace detail {
+
+std::optional<std::string> tail_number_problem(const std::string& tail_number) {
     bool ok = !tail_number.empty() && tail_number.size() <= kMaxTailNumberLength;
     for (char c : tail_number) {
         ok = ok && (std::isupper(static_cast<unsigned char>(c)) || std::isdigit(static_cast<unsigned char>(c)) || c == '-');
     }
-    if (!ok) {
-        throw DbError("tail number '" + tail_number + "' is not valid: use 1 to " + std::to_string(kMaxTailNumberLength) +
-                      " characters of A-Z, 0-9 and '-'");
-    }
+    if (ok) return std::nullopt;
+    return "tail number '" + tail_number + "' is not valid: use 1 to " + std::to_string(kMaxTailNumberLength) +
+           " characters of A-Z, 0-9 and '-'";
 }
 
-std::int64_t store_run(Database& db, const StoredRun& run) {
-    check_tail_number(run.tail_number);
-    if (run.samples.empty()) throw DbError("run for " + run.tail_number + " has no samples");
-    if (run.raw_log.empty()) throw DbError("run for " + run.tail_number + " has no raw log; the raw log is kept with every run");
+void check_run(const StoredRun& run, const std::string& context) {
+    if (const auto problem = tail_number_problem(run.tail_number)) throw DbError(context + *problem);
+    if (run.samples.empty()) throw DbError(context + "run for " + run.tail_number + " has no samples");
+    if (run.raw_log.empty()) {
+        throw DbError(context + "run for " + run.tail_number + " has no raw log; the raw log is kept with every run");
+    }
     for (const auto& [v, f] : {std::pair{run.k_t_nm_per_a, "k_t_nm_per_a"}, std::pair{run.j_kgm2, "j_kgm2"},
                                std::pair{run.tau, "tau"}, std::pair{run.sample_period_s, "sample_period_s"}}) {
-        check_finite(v, f);
+        check_finite(v, f, context);
     }
     for (std::size_t i = 0; i < run.samples.size(); ++i) {
         const auto& s = run.samples[i];
         const std::string at = " of sample " + std::to_string(i);
-        check_finite(s.t_s, "t_s" + at);
-        check_finite(s.current_a, "current_a" + at);
-        check_finite(s.speed_rad_s, "speed_rad_s" + at);
-        check_finite(s.theta_m_rad, "theta_m_rad" + at);
-        check_finite(s.hinge_moment_nm, "hinge_moment_nm" + at);
-        check_finite(s.command_deg, "command_deg" + at);
+        check_finite(s.t_s, "t_s" + at, context);
+        check_finite(s.current_a, "current_a" + at, context);
+        check_finite(s.speed_rad_s, "speed_rad_s" + at, context);
+        check_finite(s.theta_m_rad, "theta_m_rad" + at, context);
+        check_finite(s.hinge_moment_nm, "hinge_moment_nm" + at, context);
+        check_finite(s.command_deg, "command_deg" + at, context);
     }
+    for (const auto& e : run.estimates) {
+        const std::string what = " of estimate " + e.estimator + "/" + e.parameter;
+        if (e.value) check_finite(*e.value, "value" + what, context);
+        check_finite(e.std_error, "std_error" + what, context);
+    }
+}
 
-    Transaction tx(db);
+std::int64_t insert_run(Database& db, const StoredRun& run, std::optional<std::int64_t> session_id) {
+    if (sqlite3_get_autocommit(db.handle()) != 0) {
+        throw DbError("internal error: a run is written only inside an open transaction on " + db.path());
+    }
     Statement(db, "INSERT OR IGNORE INTO aircraft(tail_number) VALUES (?)").bind(1, run.tail_number).run();
     Statement ins(db,
                   "INSERT INTO runs(tail_number, actuator_serial, started_utc, source, load_case, sequence, k_t_nm_per_a, "
-                  "j_kgm2, tau, sample_period_s, valid, status_note, meta_json) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?)");
+                  "j_kgm2, tau, sample_period_s, valid, status_note, meta_json, session_id) "
+                  "VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
     ins.bind(1, run.tail_number).bind(2, run.actuator_serial).bind(3, run.started_utc).bind(4, run.source);
     ins.bind(5, run.load_case).bind(6, run.sequence).bind(7, run.k_t_nm_per_a).bind(8, run.j_kgm2).bind(9, run.tau);
     ins.bind(10, run.sample_period_s).bind(11, static_cast<std::int64_t>(run.valid ? 1 : 0)).bind(12, run.status_note);
-    ins.bind(13, run.meta_json).run();
+    ins.bind(13, run.meta_json);
+    if (session_id) {
+        ins.bind(14, *session_id);
+    } else {
+        ins.bind_null(14);
+    }
+    ins.run();
     const std::int64_t id = db.last_insert_id();
 
     Statement raw(db, "INSERT INTO raw_logs(run_id, format, content) VALUES (?,?,?)");
     raw.bind(1, id).bind(2, run.raw_log_format).bind_blob(3, run.raw_log).run();
 
-    Statement smp(db, "INSERT INTO samples VALUES (?,?,?,?,?,?,?,?)");
+    Statement smp(db, "INSERT INTO samples(run_id, sample_index, t_s, current_a, speed_rad_s, theta_m_rad, "
+                      "hinge_moment_nm, command_deg) VALUES (?,?,?,?,?,?,?,?)");
     for (std::size_t i = 0; i < run.samples.size(); ++i) {
         const auto& s = run.samples[i];
         smp.bind(1, id).bind(2, static_cast<std::int64_t>(i)).bind(3, s.t_s).bind(4, s.current_a).bind(5, s.speed_rad_s);
         smp.bind(6, s.theta_m_rad).bind(7, s.hinge_moment_nm).bind(8, s.command_deg).run();
         smp.reset();
     }
-    Statement est(db, "INSERT INTO estimates VALUES (?,?,?,?,?,?,?,?)");
+    Statement est(db, "INSERT INTO estimates(run_id, estimator, parameter, value, std_error, identifiable, method, note) "
+                      "VALUES (?,?,?,?,?,?,?,?)");
     for (const auto& e : run.estimates) {
         est.bind(1, id).bind(2, e.estimator).bind(3, e.parameter);
         if (e.value) {
-            check_finite(*e.value, "estimate " + e.estimator + "/" + e.parameter);
             est.bind(4, *e.value);
         } else {
             est.bind_null(4);
@@ -79,6 +104,19 @@ std::int64_t store_run(Database& db, const StoredRun& run) {
         est.run();
         est.reset();
     }
+    return id;
+}
+
+}  // namespace detail
+
+void check_tail_number(const std::string& tail_number) {
+    if (const auto problem = detail::tail_number_problem(tail_number)) throw DbError(*problem);
+}
+
+std::int64_t store_run(Database& db, const StoredRun& run) {
+    detail::check_run(run, "");
+    Transaction tx(db);
+    const std::int64_t id = detail::insert_run(db, run, std::nullopt);
     tx.commit();
     return id;
 }
@@ -86,7 +124,7 @@ std::int64_t store_run(Database& db, const StoredRun& run) {
 namespace {
 constexpr const char* kRunColumns =
     "run_id, tail_number, actuator_serial, started_utc, source, load_case, sequence, k_t_nm_per_a, j_kgm2, tau, "
-    "sample_period_s, valid, status_note, meta_json FROM runs";
+    "sample_period_s, valid, status_note, meta_json, session_id FROM runs";
 
 StoredRun read_run_row(const Statement& st) {
     StoredRun r;
@@ -104,7 +142,27 @@ StoredRun read_run_row(const Statement& st) {
     r.valid = st.column_int(11) != 0;
     r.status_note = st.column_text(12);
     r.meta_json = st.column_text(13);
+    if (!st.column_is_null(14)) r.session_id = st.column_int(14);
     return r;
+}
+
+std::vector<StoredEstimate> load_estimates(Database& db, std::int64_t run_id) {
+    Statement est(db, "SELECT estimator, parameter, value, std_error, identifiable, method, note FROM estimates "
+                      "WHERE run_id = ? ORDER BY estimator, parameter");
+    est.bind(1, run_id);
+    std::vector<StoredEstimate> out;
+    while (est.step()) {
+        StoredEstimate e;
+        e.estimator = est.column_text(0);
+        e.parameter = est.column_text(1);
+        if (!est.column_is_null(2)) e.value = est.column_double(2);
+        e.std_error = est.column_double(3);
+        e.identifiable = est.column_int(4) != 0;
+        e.method = est.column_text(5);
+        e.note = est.column_text(6);
+        out.push_back(e);
+    }
+    return out;
 }
 }  // namespace
 
@@ -126,20 +184,7 @@ StoredRun load_run(Database& db, std::int64_t run_id) {
         r.raw_log_format = raw.column_text(0);
         r.raw_log = raw.column_text(1);
     }
-    Statement est(db, "SELECT estimator, parameter, value, std_error, identifiable, method, note FROM estimates "
-                      "WHERE run_id = ? ORDER BY estimator, parameter");
-    est.bind(1, run_id);
-    while (est.step()) {
-        StoredEstimate e;
-        e.estimator = est.column_text(0);
-        e.parameter = est.column_text(1);
-        if (!est.column_is_null(2)) e.value = est.column_double(2);
-        e.std_error = est.column_double(3);
-        e.identifiable = est.column_int(4) != 0;
-        e.method = est.column_text(5);
-        e.note = est.column_text(6);
-        r.estimates.push_back(e);
-    }
+    r.estimates = load_estimates(db, run_id);
     return r;
 }
 
@@ -149,6 +194,15 @@ std::vector<StoredRun> list_runs(Database& db, const std::string& tail_number) {
     st.bind(1, tail_number);
     std::vector<StoredRun> out;
     while (st.step()) out.push_back(read_run_row(st));
+    return out;
+}
+
+std::vector<StoredRun> detail::session_runs(Database& db, std::int64_t session_id) {
+    Statement st(db, std::string("SELECT ") + kRunColumns + " WHERE session_id = ? ORDER BY run_id");
+    st.bind(1, session_id);
+    std::vector<StoredRun> out;
+    while (st.step()) out.push_back(read_run_row(st));
+    for (auto& r : out) r.estimates = load_estimates(db, r.run_id);
     return out;
 }
 

@@ -5,6 +5,7 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 
@@ -36,7 +37,7 @@ StoredRun example_run(const std::string& tail = "F-WEMA") {
 
 TEST(RunStore, StoreThenLoadGivesBackEverything) {
     Database db(":memory:");
-    EXPECT_EQ(db.schema_version(), 1);
+    EXPECT_EQ(db.schema_version(), 2);
     const StoredRun in = example_run();
     const auto id = store_run(db, in);
     const StoredRun out = load_run(db, id);
@@ -88,7 +89,9 @@ TEST(RunStore, MisuseIsAClearError) {
 }
 
 TEST(Database, ReopensAFileWithoutMigratingTwiceAndRefusesNewerSchemas) {
-    const auto path = (std::filesystem::temp_directory_path() / "emadiag_db_test.sqlite").string();
+    // One file per process: another build directory may run this test at the same time.
+    const auto path =
+        (std::filesystem::temp_directory_path() / ("emadiag_db_test_" + std::to_string(::getpid()) + ".sqlite")).string();
     std::filesystem::remove(path);
     {
         Database db(path);
@@ -96,7 +99,7 @@ TEST(Database, ReopensAFileWithoutMigratingTwiceAndRefusesNewerSchemas) {
     }
     {
         Database db(path);
-        EXPECT_EQ(db.schema_version(), 1);
+        EXPECT_EQ(db.schema_version(), 2);
         EXPECT_EQ(list_runs(db, "F-WEMA").size(), 1U);
         db.exec("PRAGMA user_version = 99");
     }

@@ -40,6 +40,9 @@ struct StoredRun {
     std::string raw_log_format;  ///< "candump" or "csv"
     std::string raw_log;         ///< the bytes as received, kept before anything is computed
     std::vector<StoredEstimate> estimates;
+    /// The test session the run belongs to; set by load_run / list_runs, empty for a run stored on its
+    /// own. Ignored on input, like run_id: store_run writes NULL, store_test_session the new session's id.
+    std::optional<std::int64_t> session_id;
 };
 
 /// Checks a tail number: 1 to 16 characters of A-Z, 0-9 and '-'. Throws DbError naming it.
@@ -52,7 +55,8 @@ void check_tail_number(const std::string& tail_number);
 /// Loads one run with everything stored for it. Throws DbError when there is no such run.
 [[nodiscard]] StoredRun load_run(Database& db, std::int64_t run_id);
 
-/// The runs of one aircraft, oldest first, without samples or raw logs.
+/// The runs of one aircraft (on their own or in a test session), oldest first, without samples, raw
+/// logs or estimates.
 [[nodiscard]] std::vector<StoredRun> list_runs(Database& db, const std::string& tail_number);
 
 }  // namespace emadiag::db
