@@ -107,6 +107,16 @@ RecordOutcome Recorder::record(const std::atomic<bool>& interrupt) {
                    ", MaintenanceEnable=" + icd.value_name(icd.status, "MaintenanceEnable", s->maintenance_enable) + ")";
         fail("the EMA on " + bus_.spec() + " refused ENTER_GROUND_TEST: " + why);
     }
+    // The acknowledgement is not enough: the EMA's own 50 Hz status must say GROUND_TEST before
+    // anything moves the surface.
+    const auto in_ground_test = [&] { const auto& s = decoder_.last_status(); return s && s->mode == can::icd::Mode::GroundTest; };
+    if (!pump(Clock::now() + options_.answer_timeout, in_ground_test)) {
+        const auto& s = decoder_.last_status();
+        fail("the EMA on " + bus_.spec() + " acknowledged ENTER_GROUND_TEST but its EMA_Status (0x020) " +
+             (s ? "reports Mode=" + icd.value_name(icd.status, "Mode", static_cast<int>(s->mode)) : std::string("never arrived")) +
+             " after " + std::to_string(options_.answer_timeout.count()) +
+             " ms; no sequence was started");
+    }
 
     // 3. Start the sequence.
     send_command(Command::StartSequence);

@@ -28,6 +28,7 @@ struct EmaSimOptions {
     double drop_fraction = 0.0;
     double corrupt_crc_fraction = 0.0;
     std::optional<double> silent_after;
+    bool ack_without_ground_test = false;
     std::uint64_t fault_seed = 1;
     std::uint32_t serial = 1001;
     std::uint64_t exit_after = 0;
@@ -50,6 +51,8 @@ const bool registered = register_command(Command{
         sub.add_option("--corrupt-crc-fraction", o->corrupt_crc_fraction, "Fault: fraction of telemetry frames with a wrong CRC")
             ->capture_default_str();
         sub.add_option("--silent-after", o->silent_after, "Fault: stop transmitting after this fraction of a sequence");
+        sub.add_flag("--ack-without-ground-test", o->ack_without_ground_test,
+                     "Fault: accept ENTER_GROUND_TEST but stay in NORMAL mode (the tool must refuse to start)");
         sub.add_option("--fault-seed", o->fault_seed, "Seed of the fault draws")->capture_default_str();
         sub.add_option("--serial", o->serial, "Serial number reported in EMA_Ident")->capture_default_str();
         sub.add_option("--realtime-priority", o->realtime_priority,
@@ -70,6 +73,7 @@ const bool registered = register_command(Command{
             cfg.faults.drop_fraction = o->drop_fraction;
             cfg.faults.corrupt_crc_fraction = o->corrupt_crc_fraction;
             cfg.faults.silent_after_fraction = o->silent_after;
+            cfg.faults.ack_without_ground_test = o->ack_without_ground_test;
             cfg.faults.seed = o->fault_seed;
             auto bus = can::open_bus(o->bus);
             node::EmaNode ema(*bus, cfg);

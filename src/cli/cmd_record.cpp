@@ -1,6 +1,7 @@
 // emadiag record: run one test sequence against the EMA on a CAN bus; write RUN.log (candump,
 // every frame both ways) and RUN.csv (the run CSV format).
 #include "cli/command.hpp"
+#include "cli/interrupt.hpp"
 
 #include "can_tool/recorder.hpp"
 #include "core/emadiag_error.hpp"
@@ -8,15 +9,11 @@
 #include "emadiag/can/can_bus.hpp"
 
 #include <atomic>
-#include <csignal>
 #include <iostream>
 #include <memory>
 
 namespace emadiag::cli {
 namespace {
-
-std::atomic<bool> g_interrupt{false};
-extern "C" void on_interrupt(int) { g_interrupt.store(true); }
 
 constexpr int kExitInvalid = 2;
 constexpr int kExitAborted = 130;
@@ -41,11 +38,7 @@ const bool registered = register_command(Command{
         sub.add_option("--answer-timeout-ms", o->answer_timeout_ms, "Time the EMA has to answer a command")->capture_default_str();
         sub.add_flag("--no-heartbeat", o->no_heartbeat, "Test only: send no TOOL_Heartbeat (the EMA must abort)");
         return [o] {
-            struct sigaction sa {};
-            sa.sa_handler = on_interrupt;
-            sigemptyset(&sa.sa_mask);
-            sigaction(SIGINT, &sa, nullptr);
-            sigaction(SIGTERM, &sa, nullptr);
+            const std::atomic<bool>& interrupt = install_interrupt_handler();
             auto bus = can::open_bus(o->bus);
             can_tool::RecorderOptions ro;
             ro.sequence = o->sequence == "brk" ? can::icd::TestSequence::Brk : can::icd::TestSequence::Dyn;
@@ -54,7 +47,7 @@ const bool registered = register_command(Command{
             ro.answer_timeout = std::chrono::milliseconds(o->answer_timeout_ms);
             ro.send_heartbeat = !o->no_heartbeat;
             can_tool::Recorder recorder(*bus, ro);
-            const can_tool::RecordOutcome r = recorder.record(g_interrupt);
+            const can_tool::RecordOutcome r = recorder.record(interrupt);
             const std::string csv = o->out + ".csv";
             write_run_csv_file(csv, r.run);
             const auto& s = r.stats;
@@ -66,7 +59,7 @@ const bool registered = register_command(Command{
                       << "  wrote " << r.log_lines << " frames to " << ro.log_path << " and " << r.run.samples.size() << " samples to "
                       << csv << '\n';
             if (r.status == "aborted") {
-                std::cerr << "emadiag: error: run aborted (" << (g_interrupt.load() ? "Ctrl-C" : r.invalid_reason)
+                std::cerr << "emadiag: error: run aborted (" << (interrupt.load() ? "Ctrl-C" : r.invalid_reason)
                           << "); partial log kept in " << ro.log_path << ", marked status=aborted in " << csv << '\n';
                 return kExitAborted;
             }

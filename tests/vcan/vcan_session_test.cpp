@@ -4,6 +4,7 @@
 // without loss; 1 is real time).
 #include "can_tool/candump_run.hpp"
 #include "core/run_csv.hpp"
+#include "emadiag/db/test_session_store.hpp"
 #include "emadiag/can/can_error.hpp"
 #include "emadiag/can/ema_icd.hpp"
 #include "emadiag/can/socketcan_bus.hpp"
@@ -11,6 +12,7 @@
 #include "support/samples_within_resolution.hpp"
 
 #include <gmock/gmock.h>
+#include <nlohmann/json.hpp>
 #include <gtest/gtest.h>
 
 #include <dirent.h>
@@ -131,8 +133,9 @@ public:
     }
     std::string path(const std::string& name) const { return dir_ + "/" + name; }
 
-    std::unique_ptr<Process> start_ema(std::vector<std::string> extra, const std::string& name = "ema") {
-        std::vector<std::string> args{EMADIAG_CLI, "ema-sim", "--bus", bus_spec(), "--time-scale", time_scale(), "--exit-after", "1"};
+    std::unique_ptr<Process> start_ema(std::vector<std::string> extra, const std::string& name = "ema", int sequences = 1) {
+        std::vector<std::string> args{EMADIAG_CLI, "ema-sim", "--bus", bus_spec(), "--time-scale", time_scale(), "--exit-after",
+                                      std::to_string(sequences)};
         args.insert(args.end(), extra.begin(), extra.end());
         auto p = std::make_unique<Process>(args, path(name + ".out"));
         EXPECT_TRUE(p->wait_output("ema-sim on", std::chrono::seconds(10))) << p->err();
@@ -412,4 +415,56 @@ TEST_F(Vcan, SocketCanFiltersFdFramesTimestampsTimeoutAndErrorFrames) {
     EXPECT_EQ(r.status, can::ReceiveStatus::BusOff) << can::to_string(r.status);
     EXPECT_THAT(r.detail, HasSubstr("bus-off"));
     EXPECT_THAT([] { can::SocketCanBus nope("nosuchcan9"); }, ::testing::ThrowsMessage<can::CanError>(HasSubstr("socketcan:nosuchcan9: no such CAN interface")));
+}
+
+// The technician's one command, end to end over SocketCAN: ground routine, estimates, verdict,
+// everything stored under the tail number; the exit code is the verdict.
+TEST_F(Vcan, TechnicianTestRunOnAHealthyEmaIsServiceableAndStored) {
+    auto ema = start_ema({"--case", "A", "--noise", "typical", "--seed", "5"}, "ema", 2);
+    Process run({EMADIAG_CLI, "test-run", "--bus", bus_spec(), "--tail", "N123EM", "--phase", "post-flight", "--db", path("m.db"),
+                 "--out-dir", path("logs")},
+                path("test-run.out"));
+    const int rc = run.wait(std::chrono::seconds(60));
+    std::cout << run.out();
+    ASSERT_EQ(rc, 0) << run.out() << run.err() << ema->out();
+    EXPECT_THAT(run.out(), HasSubstr("VERDICT: SERVICEABLE"));
+    EXPECT_THAT(run.out(), ::testing::ContainsRegex("eta_O +physics:dyn +- +min [0-9.]+ NOT_IDENTIFIABLE"));
+    EXPECT_EQ(ema->wait(std::chrono::seconds(10)), 0);
+    db::Database database(path("m.db"));
+    const auto sessions = db::list_test_sessions(database, "N123EM");
+    ASSERT_EQ(sessions.size(), 1u);
+    const auto s = db::load_test_session(database, sessions[0].session_id);
+    EXPECT_EQ(s.verdict, "SERVICEABLE");
+    ASSERT_EQ(s.runs.size(), 2u);
+    for (const auto& r : s.runs) {
+        EXPECT_TRUE(r.valid) << r.status_note;
+        const auto meta = nlohmann::json::parse(r.meta_json);
+        EXPECT_EQ(meta.value("frames_lost", ""), "0");
+        EXPECT_EQ(r.raw_log, slurp(meta.value("log_file", "")));  // the candump log, byte for byte
+    }
+    EXPECT_EQ(s.runs[0].samples.size(), 1000u);
+    EXPECT_EQ(s.runs[1].samples.size(), 1600u);
+}
+
+TEST_F(Vcan, TechnicianTestRunOnAWornEmaIsUnserviceable) {
+    auto ema = start_ema({"--case", "A", "--noise", "typical", "--seed", "6", "--fsj", "0.17"});
+    Process run({EMADIAG_CLI, "test-run", "--bus", bus_spec(), "--tail", "N123EM", "--sequences", "brk", "--db", path("m.db"),
+                 "--out-dir", path("logs")},
+                path("test-run.out"));
+    const int rc = run.wait(std::chrono::seconds(60));
+    std::cout << run.out();
+    EXPECT_EQ(rc, 3) << run.out() << run.err() << ema->out();
+    EXPECT_THAT(run.out(), HasSubstr("VERDICT: UNSERVICEABLE -- FSJ_Nm"));
+    EXPECT_EQ(ema->wait(std::chrono::seconds(10)), 0);
+}
+
+TEST_F(Vcan, TechnicianTestRunRefusesAnEmaThatDoesNotReportGroundTest) {
+    auto ema = start_ema({"--ack-without-ground-test"});
+    Process run({EMADIAG_CLI, "test-run", "--bus", bus_spec(), "--tail", "N123EM", "--db", path("m.db"), "--out-dir", path("logs")},
+                path("test-run.out"));
+    EXPECT_EQ(run.wait(std::chrono::seconds(20)), 1);
+    EXPECT_THAT(run.err(), HasSubstr("acknowledged ENTER_GROUND_TEST but its EMA_Status (0x020) reports Mode=NORMAL"));
+    ema->signal(SIGINT);
+    EXPECT_EQ(ema->wait(std::chrono::seconds(5)), 0);
+    EXPECT_THAT(ema->out(), HasSubstr("ema-sim: 0 sequences started"));
 }

@@ -200,7 +200,9 @@ void EmaNode::handle_command(const can::ToolCommand& c, Clock::time_point now) {
         case Command::EnterGroundTest:
             if (!status_.weight_on_wheels) ack.result = AckResult::RefusedWeightOnWheels;
             else if (!status_.maintenance_enable) ack.result = AckResult::RefusedMaintenanceDisabled;
-            else {
+            else if (config_.faults.ack_without_ground_test) {
+                event("accepted ENTER_GROUND_TEST but stayed in NORMAL (fault injection)");
+            } else {
                 status_.mode = Mode::GroundTest;
                 last_heartbeat_ = now;  // the watchdog counts from entry
                 event("entered GROUND_TEST");

@@ -30,6 +30,7 @@ struct EmaNodeFaults {
     double drop_fraction = 0.0;         ///< probability that a telemetry frame is not transmitted
     double corrupt_crc_fraction = 0.0;  ///< probability that a telemetry frame carries a wrong CRC
     std::optional<double> silent_after_fraction;  ///< stop transmitting after this fraction of a sequence
+    bool ack_without_ground_test = false;  ///< accept ENTER_GROUND_TEST but stay in NORMAL (a faulty mode switch)
     std::uint64_t seed = 1;                       ///< seed of the fault draws (std::mt19937_64)
     void validate() const;
 };

@@ -1,0 +1,92 @@
+#include "diagnosis/health_limits.hpp"
+
+#include "core/emadiag_error.hpp"
+#include "estimation/dataset.hpp"
+#include "estimation/health_estimate.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+
+namespace emadiag {
+namespace {
+
+/// Friction may not rise above its limit; efficiency may not fall below it.
+LimitKind natural_kind(const std::string& parameter) {
+    return parameter == kParamFdj || parameter == kParamFsj ? LimitKind::Max : LimitKind::Min;
+}
+
+}  // namespace
+
+const char* to_string(LimitKind k) { return k == LimitKind::Max ? "max" : "min"; }
+
+HealthLimits HealthLimits::datasheet_envelope() {
+    HealthLimits h;
+    h.source = "ema-reference.md section 8 envelope (nominal +/-20 %)";
+    for (const char* p : {kParamFdj, kParamFsj, kParamEtaO, kParamEtaA}) {
+        const HealthRange r = health_range(p);
+        const LimitKind k = natural_kind(p);
+        h.limits.push_back({p, k, k == LimitKind::Max ? r.hi : r.lo});
+    }
+    return h;
+}
+
+HealthLimits HealthLimits::from_json(const nlohmann::json& j, const std::string& where) {
+    HealthLimits h = datasheet_envelope();
+    h.source = where;
+    std::vector<std::string> problems;
+    if (!j.is_object()) throw EmadiagError(where + ": limits must be a JSON object such as {\"FDJ_Nm\": {\"max\": 0.09}}");
+    for (const auto& [key, v] : j.items()) {
+        auto it = std::find_if(h.limits.begin(), h.limits.end(), [&](const ParameterLimit& l) { return l.parameter == key; });
+        if (it == h.limits.end()) {
+            problems.push_back("unknown parameter \"" + key + "\" (expected FDJ_Nm, FSJ_Nm, eta_O or eta_A)");
+            continue;
+        }
+        const std::string want = to_string(natural_kind(key));
+        const std::string other = natural_kind(key) == LimitKind::Max ? "min" : "max";
+        if (!v.is_object() || v.size() != 1 || !v.contains(want)) {
+            problems.push_back(key + ": expected {\"" + want + "\": value}" +
+                               (v.is_object() && v.contains(other) ? " (a " + other + " limit makes no sense for it)" : "") +
+                               ", got " + v.dump());
+            continue;
+        }
+        const auto& x = v.at(want);
+        if (!x.is_number() || !std::isfinite(x.get<double>()) || x.get<double>() <= 0) {
+            problems.push_back(key + "." + want + ": " + x.dump() + " is not a finite positive number");
+            continue;
+        }
+        it->limit = x.get<double>();
+    }
+    if (!problems.empty()) {
+        std::string msg = where + ": " + std::to_string(problems.size()) + " problem(s) in the limits:";
+        for (const auto& p : problems) msg += "\n  " + p;
+        throw EmadiagError(msg);
+    }
+    return h;
+}
+
+HealthLimits HealthLimits::load(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw EmadiagError(path + ": cannot open the limits file");
+    nlohmann::json j;
+    try {
+        j = nlohmann::json::parse(in);
+    } catch (const nlohmann::json::parse_error& e) {
+        throw EmadiagError(path + ": not valid JSON: " + e.what());
+    }
+    return from_json(j, path);
+}
+
+const ParameterLimit* HealthLimits::find(const std::string& parameter) const {
+    for (const auto& l : limits)
+        if (l.parameter == parameter) return &l;
+    return nullptr;
+}
+
+nlohmann::json HealthLimits::to_json() const {
+    nlohmann::json j = nlohmann::json::object();
+    for (const auto& l : limits) j[l.parameter] = {{to_string(l.kind), l.limit}};
+    return j;
+}
+
+}  // namespace emadiag

@@ -1,0 +1,167 @@
+// The technician's test run against the simulated EMA on an in-process bus (the vcan suite repeats
+// it with separate processes over SocketCAN): verdicts for a healthy and a worn transmission,
+// everything stored under the tail number, and the refusals that must come before anything moves.
+#include "core/emadiag_error.hpp"
+#include "diagnosis/test_run.hpp"
+#include "emadiag/can/memory_bus.hpp"
+#include "emadiag/db/db_error.hpp"
+#include "emadiag/db/test_session_store.hpp"
+#include "support/node_runner.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+using namespace emadiag;
+using ::testing::HasSubstr;
+
+namespace {
+
+node::EmaNodeConfig ema_config(double fdj_nm, double fsj_nm, std::uint64_t seed) {
+    node::EmaNodeConfig c;
+    c.sim.load_case = sim::LoadCase::A;  // on the ramp
+    c.sim.noise = sim::NoiseProfile::Typical;
+    c.sim.seed = seed;
+    c.sim.params.fdj_nm = fdj_nm;
+    c.sim.params.fsj_nm = fsj_nm;
+    return c;
+}
+
+class TestRun : public ::testing::Test {
+protected:
+    void SetUp() override {
+        dir_ = std::filesystem::path(EMADIAG_BINARY_DIR) / ("test_run_test_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+        std::filesystem::remove_all(dir_);
+        std::filesystem::create_directories(dir_);
+    }
+    void TearDown() override {
+        if (!HasFailure()) std::filesystem::remove_all(dir_);
+    }
+    TestRunOptions options(const std::string& tail) const {
+        TestRunOptions o;
+        o.tail_number = tail;
+        o.phase = kPhasePostFlight;
+        o.out_dir = dir_ / "logs";
+        o.db_path = (dir_ / "maintenance.db").string();
+        o.tool_version = "test";
+        return o;
+    }
+    static std::string slurp(const std::string& path) {
+        std::ifstream in(path, std::ios::binary);
+        std::ostringstream s;
+        s << in.rdbuf();
+        return s.str();
+    }
+    std::filesystem::path dir_;
+    std::atomic<bool> interrupt_{false};
+};
+
+}  // namespace
+
+TEST_F(TestRun, HealthyEmaIsServiceableAndEverythingIsStoredUnderTheTail) {
+    can::MemoryBusHub hub;
+    can::MemoryBus tool(hub, "tool");
+    test::NodeRunner ema(hub, ema_config(0.08, 0.12, 5));
+    const TestRunOptions o = options("N123EM");
+    const TestRunResult r = run_test(tool, o, interrupt_);
+    EXPECT_EQ(r.assessment.verdict, Verdict::Serviceable) << r.assessment.reason;
+    ASSERT_EQ(r.runs.size(), 2u);
+    EXPECT_EQ(r.runs[0].sequence, "dyn");
+    EXPECT_EQ(r.runs[1].sequence, "brk");
+    for (const auto& run : r.runs) {
+        EXPECT_TRUE(run.outcome.valid) << run.outcome.invalid_reason;
+        EXPECT_TRUE(run.estimates.has_value()) << run.estimate_error;
+        EXPECT_TRUE(std::filesystem::exists(run.csv_path));
+    }
+    // eta is not identifiable on the ground (case A): listed, not assessed.
+    bool eta_listed = false;
+    for (const auto& f : r.assessment.findings)
+        if (f.parameter == kParamEtaO && f.estimator == "physics:dyn") eta_listed = f.status == FindingStatus::NotIdentifiable;
+    EXPECT_TRUE(eta_listed);
+
+    db::Database database(o.db_path);
+    const auto sessions = db::list_test_sessions(database, "N123EM");
+    ASSERT_EQ(sessions.size(), 1u);
+    const db::StoredTestSession s = db::load_test_session(database, sessions[0].session_id);
+    EXPECT_EQ(s.verdict, "SERVICEABLE");
+    EXPECT_EQ(s.phase, "post-flight");
+    EXPECT_EQ(s.tool_version, "test");
+    EXPECT_EQ(s.findings.size(), r.assessment.findings.size());
+    ASSERT_EQ(s.runs.size(), 2u);
+    EXPECT_EQ(s.runs[0].samples.size(), r.runs[0].outcome.run.samples.size());
+    EXPECT_EQ(s.runs[1].samples.size(), r.runs[1].outcome.run.samples.size());
+    // The raw bus logs are stored byte for byte.
+    EXPECT_EQ(s.runs[0].raw_log, slurp(r.runs[0].log_path));
+    EXPECT_EQ(s.runs[1].raw_log, slurp(r.runs[1].log_path));
+    EXPECT_FALSE(s.runs[1].raw_log.empty());
+    EXPECT_FALSE(s.runs[1].estimates.empty());
+    EXPECT_EQ(s.runs[0].load_case, "A");
+}
+
+TEST_F(TestRun, WornTransmissionIsUnserviceableNamingTheParameter) {
+    can::MemoryBusHub hub;
+    can::MemoryBus tool(hub, "tool");
+    test::NodeRunner ema(hub, ema_config(0.08, 0.17, 6));  // static friction 42 % above nominal
+    TestRunOptions o = options("N123EM");
+    o.phase = kPhasePreFlight;
+    o.sequences = {can::icd::TestSequence::Brk};
+    const TestRunResult r = run_test(tool, o, interrupt_);
+    EXPECT_EQ(r.assessment.verdict, Verdict::Unserviceable) << r.assessment.reason;
+    EXPECT_THAT(r.assessment.reason, HasSubstr("FSJ_Nm"));
+    db::Database database(o.db_path);
+    ASSERT_EQ(db::list_test_sessions(database, "N123EM").size(), 1u);
+    EXPECT_EQ(db::list_test_sessions(database, "N123EM")[0].verdict, "UNSERVICEABLE");
+}
+
+TEST_F(TestRun, BadTailNumberIsRefusedBeforeTheSurfaceMoves) {
+    can::MemoryBusHub hub;
+    can::MemoryBus tool(hub, "tool");
+    test::NodeRunner ema(hub, ema_config(0.08, 0.12, 1));
+    EXPECT_THROW((void)run_test(tool, options("n123 em"), interrupt_), db::DbError);
+    TestRunOptions o = options("N123EM");
+    o.sequences = {can::icd::TestSequence::Dyn, can::icd::TestSequence::Dyn};
+    EXPECT_THAT([&] { (void)run_test(tool, o, interrupt_); }, ::testing::ThrowsMessage<EmadiagError>(HasSubstr("dyn is listed twice")));
+    o = options("N123EM");
+    o.phase = "mid-flight";
+    EXPECT_THAT([&] { (void)run_test(tool, o, interrupt_); }, ::testing::ThrowsMessage<EmadiagError>(HasSubstr("phase \"mid-flight\"")));
+    EXPECT_EQ(ema.stats().sequences_started, 0u);
+}
+
+TEST_F(TestRun, EmaThatDoesNotReportGroundTestIsNeverStarted) {
+    can::MemoryBusHub hub;
+    can::MemoryBus tool(hub, "tool");
+    auto cfg = ema_config(0.08, 0.12, 1);
+    cfg.faults.ack_without_ground_test = true;
+    test::NodeRunner ema(hub, cfg);
+    EXPECT_THAT([&] { (void)run_test(tool, options("N123EM"), interrupt_); },
+                ::testing::ThrowsMessage<EmadiagError>(HasSubstr("acknowledged ENTER_GROUND_TEST but its EMA_Status (0x020) reports Mode=NORMAL")));
+    EXPECT_EQ(ema.stats().sequences_started, 0u);
+    db::Database database(options("N123EM").db_path);
+    EXPECT_TRUE(db::list_test_sessions(database, "N123EM").empty());  // nothing ran, nothing stored
+}
+
+TEST_F(TestRun, InvalidRunEndsTheSessionAsNoTestAndIsStillStored) {
+    can::MemoryBusHub hub;
+    can::MemoryBus tool(hub, "tool");
+    auto cfg = ema_config(0.08, 0.12, 1);
+    cfg.faults.drop_fraction = 0.05;  // telemetry loss above the recorder's limit
+    cfg.faults.seed = 4;
+    test::NodeRunner ema(hub, cfg);
+    const TestRunOptions o = options("G-EMAD");
+    const TestRunResult r = run_test(tool, o, interrupt_);
+    EXPECT_EQ(r.assessment.verdict, Verdict::NoTest);
+    EXPECT_THAT(r.assessment.reason, HasSubstr("the dyn run is not valid"));
+    ASSERT_EQ(r.runs.size(), 1u);  // nothing more is commanded after an invalid run
+    EXPECT_EQ(ema.stats().sequences_started, 1u);
+    db::Database database(o.db_path);
+    const auto sessions = db::list_test_sessions(database, "G-EMAD");
+    ASSERT_EQ(sessions.size(), 1u);
+    EXPECT_EQ(sessions[0].verdict, "NO_TEST");
+    const auto s = db::load_test_session(database, sessions[0].session_id);
+    ASSERT_EQ(s.runs.size(), 1u);
+    EXPECT_FALSE(s.runs[0].valid);
+    EXPECT_EQ(s.runs[0].raw_log, slurp(r.runs[0].log_path));
+}
