@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# The technician's test run against the simulated EMA, both on vcan0 (run it through
+# scripts/vcan/with_vcan.sh, which provides vcan0 on any host):
+#   scripts/test-run-demo.sh BUILD_DIR OUT_DIR
+# Starts `emadiag ema-sim` (case A: on the ground, typical sensor noise) and runs
+# `emadiag test-run` against it; the database and the raw logs go to OUT_DIR.
+set -u
+EMADIAG="$1/src/emadiag"
+OUT="$2"
+mkdir -p "$OUT"
+"$EMADIAG" ema-sim --bus socketcan:vcan0 --case A --noise typical --seed 5 --time-scale "${EMADIAG_VCAN_TIME_SCALE:-2}" \
+    --exit-after 2 > "$OUT/ema-sim.out" 2>&1 &
+EMA=$!
+for _ in $(seq 100); do grep -q "ema-sim on" "$OUT/ema-sim.out" 2>/dev/null && break; sleep 0.05; done
+"$EMADIAG" test-run --bus socketcan:vcan0 --tail N123EM --phase pre-flight --db "$OUT/maintenance.db" --out-dir "$OUT/test-runs"
+RC=$?
+wait "$EMA"
+echo "-- the simulated EMA's log --"
+cat "$OUT/ema-sim.out"
+exit $RC

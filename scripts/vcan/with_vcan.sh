@@ -1,0 +1,82 @@
+#!/bin/bash
+# Runs a command on a host where vcan0 exists.
+#   scripts/vcan/with_vcan.sh WORK_DIR COMMAND [ARG...]
+# When the host kernel has vcan (vcan0 exists, or can be created), COMMAND runs directly. Otherwise
+# the script boots user-mode Linux (linux.uml, Debian package user-mode-linux) with the host's /
+# as root (hostfs), loads can, can-raw, can-dev and vcan, creates vcan0, runs COMMAND inside
+# (same working directory, HOME and TMPDIR on a guest tmpfs in WORK_DIR/scratch) and powers off.
+# The guest's exit status does not come back from linux.uml, so the guest writes COMMAND's output
+# and status into WORK_DIR; this script prints them and exits with COMMAND's status.
+# Environment: EMADIAG_VCAN_TIME_SCALE (telemetry pacing, default 2, what vcan in the guest carries
+#              without loss), EMADIAG_UML_MEM (guest memory, default 512M),
+#              EMADIAG_UML_TIMEOUT_S (default 600).
+set -u
+if [ $# -lt 2 ]; then
+    echo "usage: $0 WORK_DIR COMMAND [ARG...]" >&2
+    exit 2
+fi
+mkdir -p "$1" || exit 2
+WORK=$(cd "$1" && pwd)
+shift
+IFACE=vcan0
+
+host_has_vcan() {
+    [ -d /sys/class/net/$IFACE ] && return 0
+    # Try to create it (root with the vcan module available).
+    { modprobe vcan && ip link add dev $IFACE type vcan && ip link set $IFACE up; } >/dev/null 2>&1
+}
+
+if host_has_vcan; then
+    echo "with_vcan: host kernel has $IFACE; running directly"
+    ip link set $IFACE up >/dev/null 2>&1 || true
+    "$@"
+    exit $?
+fi
+
+UML=$(command -v linux.uml || true)
+if [ -z "$UML" ]; then
+    echo "$0: the host has no vcan and linux.uml is not installed (Debian package user-mode-linux)" >&2
+    exit 2
+fi
+rm -rf "$WORK/scratch" "$WORK/command.log" "$WORK/command.status"
+# The command, quoted word by word, for the guest's shell.
+CMD=$(printf '%q ' "$@")
+INIT="$WORK/init.sh"
+cat > "$INIT" <<INIT_EOF
+#!/bin/bash
+# PID 1 of the user-mode Linux guest (written by with_vcan.sh).
+export PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin
+# Scratch space is a tmpfs of its own inside the work folder, not over /tmp: the work folder may
+# itself live under the host's /tmp, which the guest sees through hostfs.
+mkdir -p "$WORK/scratch"
+export HOME="$WORK/scratch" TMPDIR="$WORK/scratch" EMADIAG_VCAN_TIME_SCALE=${EMADIAG_VCAN_TIME_SCALE:-2}
+mount -t proc proc /proc
+mount -t sysfs sysfs /sys
+mount -t tmpfs -o size=256m tmpfs "$WORK/scratch"
+{
+    echo "guest kernel \$(uname -r), \$(nproc) cpu"
+    M=/usr/lib/uml/modules/\$(uname -r)/kernel
+    for m in net/can/can.ko net/can/can-raw.ko drivers/net/can/dev/can-dev.ko drivers/net/can/vcan.ko; do
+        insmod "\$M/\$m" || echo "insmod \$m failed"
+    done
+    ip link add dev $IFACE type vcan && ip link set $IFACE up && ip -brief link show $IFACE
+} > "$WORK/guest-setup.log" 2>&1
+cd $(printf '%q' "$PWD") && $CMD > "$WORK/command.log" 2>&1
+echo \$? > "$WORK/command.status"
+sync
+poweroff -f
+INIT_EOF
+chmod +x "$INIT"
+echo "with_vcan: host has no $IFACE; booting user-mode Linux ($UML) to run: $*"
+timeout "${EMADIAG_UML_TIMEOUT_S:-600}" "$UML" mem="${EMADIAG_UML_MEM:-512M}" root=/dev/root rootfstype=hostfs rootflags=/ rw \
+    init="$INIT" con=null con0=fd:0,fd:1 </dev/null >"$WORK/uml-console.log" 2>&1
+UML_RC=$?
+cat "$WORK/guest-setup.log" 2>/dev/null
+if [ ! -f "$WORK/command.status" ]; then
+    echo "with_vcan: the guest wrote no status (linux.uml exit $UML_RC); console:" >&2
+    tail -n 40 "$WORK/uml-console.log" >&2
+    cat "$WORK/command.log" 2>/dev/null
+    exit 1
+fi
+cat "$WORK/command.log"
+exit "$(cat "$WORK/command.status")"
