@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
 using namespace emadiag;
 using ::testing::HasSubstr;
@@ -164,4 +165,38 @@ TEST_F(TestRun, InvalidRunEndsTheSessionAsNoTestAndIsStillStored) {
     ASSERT_EQ(s.runs.size(), 1u);
     EXPECT_FALSE(s.runs[0].valid);
     EXPECT_EQ(s.runs[0].raw_log, slurp(r.runs[0].log_path));
+}
+
+TEST_F(TestRun, NoEmaIsAClearErrorAndNothingIsStored) {
+    can::MemoryBusHub hub;
+    can::MemoryBus tool(hub, "tool");
+    const TestRunOptions o = options("N123EM");
+    EXPECT_THAT([&] { (void)run_test(tool, o, interrupt_); }, ::testing::ThrowsMessage<EmadiagError>(HasSubstr("no EMA answered")));
+    db::Database database(o.db_path);
+    EXPECT_TRUE(db::list_test_sessions(database, "N123EM").empty());
+}
+
+TEST_F(TestRun, CtrlCAbortsTheSequenceAndStoresTheSessionAsNoTest) {
+    can::MemoryBusHub hub;
+    can::MemoryBus tool(hub, "tool");
+    test::NodeRunner ema(hub, ema_config(0.08, 0.12, 2));
+    const TestRunOptions o = options("N123EM");
+    std::thread technician([this] {
+        std::this_thread::sleep_for(std::chrono::milliseconds(400));  // mid-DYN: simulation plus 0.5 s of streaming
+        interrupt_ = true;
+    });
+    const TestRunResult r = run_test(tool, o, interrupt_);
+    technician.join();
+    EXPECT_TRUE(r.interrupted);
+    EXPECT_EQ(r.assessment.verdict, Verdict::NoTest);
+    EXPECT_THAT(r.assessment.reason, HasSubstr("Ctrl-C"));
+    ASSERT_EQ(r.runs.size(), 1u);  // BRK is never commanded
+    EXPECT_EQ(r.runs[0].outcome.status, "aborted");
+    EXPECT_EQ(ema.stats().sequences_aborted, 1u);
+    EXPECT_EQ(ema.stats().sequences_started, 1u);
+    db::Database database(o.db_path);
+    const auto sessions = db::list_test_sessions(database, "N123EM");
+    ASSERT_EQ(sessions.size(), 1u);
+    EXPECT_EQ(sessions[0].verdict, "NO_TEST");
+    EXPECT_EQ(db::load_test_session(database, sessions[0].session_id).runs.at(0).raw_log, slurp(r.runs[0].log_path));
 }
