@@ -163,11 +163,7 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
         result.assessment.verdict = Verdict::NoTest;
         result.assessment.reason = "interrupted by the technician (Ctrl-C); the EMA was sent ABORT";
     } else {
-        result.assessment = assess(assessed, options.limits);
-        if (result.runs.size() < options.sequences.size() && result.assessment.verdict != Verdict::NoTest) {
-            result.assessment.verdict = Verdict::NoTest;
-            result.assessment.reason = "only " + std::to_string(result.runs.size()) + " of " + std::to_string(options.sequences.size()) + " sequences ran";
-        }
+        result.assessment = assess(assessed, options.limits);  // the loop stops early only at an invalid run: NO_TEST
     }
 
     db::StoredTestSession s;
