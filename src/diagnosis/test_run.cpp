@@ -2,6 +2,7 @@
 
 #include "core/emadiag_error.hpp"
 #include "core/run_csv.hpp"
+#include "core/run_summary.hpp"
 #include "emadiag/db/run_store.hpp"
 #include "emadiag/db/test_session_store.hpp"
 
@@ -131,6 +132,16 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
             std::to_string(st.samples_expected) + " samples, " + std::to_string(st.frames_lost) + " frames lost; raw log " + rec.log_path);
         if (result.actuator_serial.empty()) result.actuator_serial = rec.outcome.run.meta_value("ema_serial_number").value_or("");
         if (rec.outcome.valid) {
+            // What the signals say before any estimate: the residual torque T_R of eq. 7 while
+            // moving fast, and the current and travel the sequence took.
+            const RunSummary sum = summarise(rec.outcome.run);
+            std::ostringstream line;
+            line.precision(4);
+            line << "  " << rec.sequence << ": peak current " << sum.peak_current_a << " A, surface " << sum.min_surface_deg << " .. "
+                 << sum.max_surface_deg << " deg";
+            if (sum.tr_plateau_down_nm && sum.tr_plateau_up_nm)
+                line << ", T_R (eq. 7) " << *sum.tr_plateau_down_nm << " N m moving down, " << *sum.tr_plateau_up_nm << " N m moving up";
+            say(line.str());
             try {
                 rec.estimates = estimate_run(rec.outcome.run);
             } catch (const EmadiagError& e) {
