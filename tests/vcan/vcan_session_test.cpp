@@ -428,7 +428,7 @@ TEST_F(Vcan, TechnicianTestRunOnAHealthyEmaIsServiceableAndStored) {
     std::cout << run.out();
     ASSERT_EQ(rc, 0) << run.out() << run.err() << ema->out();
     EXPECT_THAT(run.out(), HasSubstr("VERDICT: SERVICEABLE"));
-    EXPECT_THAT(run.out(), ::testing::ContainsRegex("eta_O +physics:dyn +- +min [0-9.]+ NOT_IDENTIFIABLE"));
+    EXPECT_THAT(run.out(), ::testing::ContainsRegex("eta_O +physics:dyn +- +min [0-9.]+ +NOT_IDENTIFIABLE"));
     EXPECT_EQ(ema->wait(std::chrono::seconds(10)), 0);
     db::Database database(path("m.db"));
     const auto sessions = db::list_test_sessions(database, "N123EM");
