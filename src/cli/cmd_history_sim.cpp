@@ -1,0 +1,230 @@
+// emadiag history-sim --db FILE --tail N123EM [--sessions 12] [--days-between 30] [--start-utc T]
+//   [--fdj-start 0.08] [--fdj-rate-per-100d 0.004] [--fsj-start ...] [--fsj-rate-per-100d ...]
+//   [--case A] [--noise typical] [--phase pre-flight] [--seed S]:
+// a realistic maintenance history without a CAN bus, for demos and tests of `emadiag trend`. Each
+// session is the technician's ground routine (DYN then BRK) simulated directly, with FDJ and FSJ
+// drifting linearly in time; each run is estimated by both methods (estimate_run), the verdict is
+// formed against the section-8 envelope (assess) and the session is stored like `emadiag test-run`
+// stores it (runs with samples and their CSV as raw log, estimates, findings), one transaction per
+// session. Runs have source "history-sim"; their meta_json carries the true parameters
+// (true_FDJ_Nm, true_FSJ_Nm, ...). Deterministic for a seed.
+#include "cli/command.hpp"
+
+#include "core/emadiag_error.hpp"
+#include "core/run_csv.hpp"
+#include "core/sim_run.hpp"
+#include "diagnosis/health_limits.hpp"
+#include "diagnosis/test_run.hpp"
+#include "diagnosis/verdict.hpp"
+#include "emadiag/db/run_store.hpp"
+#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/sim/simulator.hpp"
+#include "estimation/health_estimate.hpp"
+#include "estimation/run_estimator.hpp"
+#include "prognostics/utc_time.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+namespace emadiag::cli {
+namespace {
+
+namespace pg = emadiag::prognostics;
+
+constexpr const char* kHistorySimSource = "history-sim";
+constexpr const char* kDefaultStartUtc = "2026-01-05T08:00:00Z";
+constexpr int kMaxSessions = 1000;
+constexpr double kMaxDaysBetween = 3650.0;
+/// Rates are given per this many days.
+constexpr double kRatePeriodDays = 100.0;
+
+struct HistorySimOptions {
+    std::string db;
+    std::string tail;
+    int sessions = 12;
+    double days_between = 30.0;
+    std::string start_utc = kDefaultStartUtc;
+    double fdj_start_nm = sim::EmaParams::datasheet().fdj_nm;
+    double fdj_rate_nm_per_100d = 0.0;
+    double fsj_start_nm = sim::EmaParams::datasheet().fsj_nm;
+    double fsj_rate_nm_per_100d = 0.0;
+    std::string load_case = "A";
+    std::string noise = "typical";
+    std::string phase = kPhasePreFlight;
+    std::uint64_t seed = 1;
+};
+
+/// SplitMix64 (Steele, Lea & Flood 2014): distinct, well-mixed noise seeds per run from one seed.
+std::uint64_t splitmix64(std::uint64_t x) {
+    x += 0x9e3779b97f4a7c15ULL;
+    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+    return x ^ (x >> 31);
+}
+
+std::string num(double v, int digits = 4) {
+    std::ostringstream os;
+    os << std::setprecision(digits) << v;
+    return os.str();
+}
+
+/// The stored form of a simulated run (after diagnosis/test_run.cpp's to_stored, which keeps the
+/// candump log; a simulated run's raw record is its run CSV).
+db::StoredRun to_stored(const Run& run, const std::string& tail, const std::string& started_utc, const std::optional<RunEstimates>& est) {
+    db::StoredRun s;
+    s.tail_number = tail;
+    s.actuator_serial = run.meta_value("ema_serial_number").value_or("");
+    s.started_utc = started_utc;
+    s.source = kHistorySimSource;
+    s.load_case = run.load_case;
+    s.sequence = run.sequence;
+    s.k_t_nm_per_a = run.constants.k_t_nm_per_a;
+    s.j_kgm2 = run.constants.j_kgm2;
+    s.tau = run.constants.tau;
+    s.sample_period_s = run.constants.sample_period_s;
+    s.valid = true;
+    s.status_note = "simulated";
+    nlohmann::json meta = nlohmann::json::object();
+    for (const auto& [k, v] : run.meta) meta[k] = v;
+    s.meta_json = meta.dump();
+    for (const auto& x : run.samples)
+        s.samples.push_back({x.t_s, x.current_a, x.speed_rad_s, x.theta_m_rad, x.hinge_moment_nm, x.command_deg});
+    std::ostringstream csv;
+    write_run_csv(csv, run);
+    s.raw_log_format = "csv";
+    s.raw_log = csv.str();
+    if (est) {
+        for (const auto& h : est->estimates)
+            for (const auto& p : h.parameters) s.estimates.push_back({h.estimator, p.name, p.value, p.std_error, p.identifiable, p.method, p.note});
+    }
+    return s;
+}
+
+void check(const HistorySimOptions& o) {
+    if (o.sessions < 1 || o.sessions > kMaxSessions)
+        throw EmadiagError("--sessions " + std::to_string(o.sessions) + " is not in [1, " + std::to_string(kMaxSessions) + "]");
+    if (!(o.days_between > 0) || !(o.days_between <= kMaxDaysBetween))
+        throw EmadiagError("--days-between " + num(o.days_between) + " is not in (0, " + num(kMaxDaysBetween) + "]");
+    if (o.phase != kPhasePreFlight && o.phase != kPhasePostFlight)
+        throw EmadiagError("--phase \"" + o.phase + "\": expected pre-flight or post-flight");
+}
+
+const bool registered = register_command(Command{
+    "history-sim", "Simulated maintenance history of one aircraft (ground routine per session, drifting friction) for emadiag trend",
+    [](CLI::App& sub) -> std::function<int()> {
+        auto o = std::make_shared<HistorySimOptions>();
+        sub.add_option("--db", o->db, "Maintenance database (SQLite; created if missing; sessions are added)")->required();
+        sub.add_option("--tail", o->tail, "Aircraft tail number")->required();
+        sub.add_option("--sessions", o->sessions, "Number of test sessions")->capture_default_str();
+        sub.add_option("--days-between", o->days_between, "Days between sessions")->capture_default_str();
+        sub.add_option("--start-utc", o->start_utc, "Start of the first session (YYYY-MM-DDThh:mm:ssZ)")->capture_default_str();
+        sub.add_option("--fdj-start", o->fdj_start_nm, "True FDJ at the first session, N m")->capture_default_str();
+        sub.add_option("--fdj-rate-per-100d", o->fdj_rate_nm_per_100d, "True FDJ drift, N m per 100 days")->capture_default_str();
+        sub.add_option("--fsj-start", o->fsj_start_nm, "True FSJ at the first session, N m")->capture_default_str();
+        sub.add_option("--fsj-rate-per-100d", o->fsj_rate_nm_per_100d, "True FSJ drift, N m per 100 days")->capture_default_str();
+        sub.add_option("--case", o->load_case, "Load case (A: on the ground)")->capture_default_str();
+        sub.add_option("--noise", o->noise, "Noise profile: none or typical")->capture_default_str();
+        sub.add_option("--phase", o->phase, "Phase of every session: pre-flight or post-flight")
+            ->capture_default_str()
+            ->check(CLI::IsMember({kPhasePreFlight, kPhasePostFlight}));
+        sub.add_option("--seed", o->seed, "Seed of the sensor noise of every run")->capture_default_str();
+        return [o] {
+            check(*o);
+            db::check_tail_number(o->tail);
+            const double start_days = pg::parse_utc_days_or_throw(o->start_utc, "--start-utc");
+            const sim::LoadCase load_case = sim::parse_load_case(o->load_case);
+            const sim::NoiseProfile noise = sim::parse_noise(o->noise);
+            const HealthLimits limits = HealthLimits::datasheet_envelope();
+            db::Database database(o->db);
+            std::cout << "emadiag history-sim: " << o->sessions << " " << o->phase << " sessions of " << o->tail << " every "
+                      << num(o->days_between) << " days from " << o->start_utc << ", case " << o->load_case << ", noise " << o->noise
+                      << ", seed " << o->seed << "\n";
+            for (int i = 0; i < o->sessions; ++i) {
+                const double t_days = i * o->days_between;
+                const double fdj_nm = o->fdj_start_nm + o->fdj_rate_nm_per_100d * t_days / kRatePeriodDays;
+                const double fsj_nm = o->fsj_start_nm + o->fsj_rate_nm_per_100d * t_days / kRatePeriodDays;
+                const std::string started_utc = pg::format_utc_time(start_days + t_days);
+                db::StoredTestSession s;
+                s.tail_number = o->tail;
+                s.phase = o->phase;
+                s.started_utc = started_utc;
+                s.tool_version = std::string(EMADIAG_VERSION) + " history-sim";
+                s.limits_json = limits.to_json().dump();
+                std::vector<AssessedRun> assessed;
+                int k = 0;
+                for (const sim::Sequence seq : {sim::Sequence::Dyn, sim::Sequence::Brk}) {
+                    sim::SimConfig c;
+                    c.load_case = load_case;
+                    c.sequence = seq;
+                    c.noise = noise;
+                    c.params.fdj_nm = fdj_nm;
+                    c.params.fsj_nm = fsj_nm;
+                    try {
+                        c.params.validate();
+                    } catch (const std::exception& e) {
+                        throw EmadiagError("session " + std::to_string(i + 1) + " (day " + num(t_days) + "): true FDJ " + num(fdj_nm) +
+                                           " N m, FSJ " + num(fsj_nm) + " N m: " + e.what());
+                    }
+                    c.seed = splitmix64(o->seed ^ splitmix64(static_cast<std::uint64_t>(2 * i + k++)));
+                    const sim::SimResult result = sim::simulate(c);
+                    Run run = make_run(c, result);
+                    run.set_meta("source", kHistorySimSource);
+                    run.set_meta("tail_number", o->tail);
+                    run.set_meta("phase", o->phase);
+                    run.set_meta("history_sim_session", std::to_string(i + 1));
+                    run.set_meta("history_sim_day", format_exact(t_days));
+                    AssessedRun a;
+                    a.sequence = sim::to_string(seq);
+                    a.valid = result.finite;
+                    if (!result.finite) a.invalid_reason = "the simulation diverged";
+                    if (a.valid) {
+                        try {
+                            a.estimates = estimate_run(run);
+                        } catch (const EmadiagError& e) {
+                            a.valid = false;
+                            a.invalid_reason = std::string("not estimated: ") + e.what();
+                        }
+                    }
+                    s.runs.push_back(to_stored(run, o->tail, started_utc, a.estimates));
+                    if (!a.valid) {
+                        s.runs.back().valid = false;
+                        s.runs.back().status_note = a.invalid_reason;
+                    }
+                    assessed.push_back(std::move(a));
+                }
+                const Assessment verdict = assess(assessed, limits);
+                s.verdict = to_string(verdict.verdict);
+                s.verdict_note = verdict.reason;
+                std::string physics_fdj = "-";
+                for (const auto& f : verdict.findings) {
+                    db::StoredFinding d;
+                    d.parameter = f.parameter;
+                    d.estimator = f.estimator;
+                    d.value = f.value;
+                    d.std_error = f.std_error;
+                    if (f.limit) {
+                        d.limit_value = f.limit->limit;
+                        d.limit_kind = to_string(f.limit->kind);
+                    }
+                    d.status = to_string(f.status);
+                    d.note = f.note;
+                    s.findings.push_back(std::move(d));
+                    if (f.parameter == kParamFdj && f.estimator == "physics:dyn" && f.value)
+                        physics_fdj = num(*f.value, 5) + " +/- " + num(f.std_error.value_or(0), 2);
+                }
+                const std::int64_t id = db::store_test_session(database, s);
+                std::cout << "  session " << id << "  " << started_utc << "  true FDJ " << num(fdj_nm, 5) << " FSJ " << num(fsj_nm, 5)
+                          << "  physics:dyn FDJ " << physics_fdj << "  " << s.verdict << '\n';
+            }
+            std::cout << "stored " << o->sessions << " test sessions of " << o->tail << " in " << o->db << '\n';
+            return 0;
+        };
+    }});
+
+}  // namespace
+}  // namespace emadiag::cli

@@ -1,0 +1,171 @@
+// emadiag trend --db FILE --tail N123EM [--phase pre-flight|post-flight|all] [--horizon-days 3650]
+//   [--draws 4000] [--seed S] [--json]:
+// the reliability engineer's trend report of one aircraft from its stored test sessions
+// (prognostics/trend_report.hpp): per health parameter the measurements, the degradation model,
+// the predicted limit crossing and the remaining useful life with its 90 % interval. Text for
+// people; --json is the stable schema of docs/trend-report.md.
+#include "cli/command.hpp"
+
+#include "emadiag/db/database.hpp"
+#include "estimation/health_estimate.hpp"
+#include "prognostics/trend_report.hpp"
+#include "prognostics/utc_time.hpp"
+
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+namespace emadiag::cli {
+namespace {
+
+namespace pg = emadiag::prognostics;
+
+struct TrendCliOptions {
+    std::string db;
+    std::string tail;
+    std::string phase = "pre-flight";
+    double horizon_days = pg::kDefaultHorizonDays;
+    int draws = pg::kDefaultMonteCarloDraws;
+    std::uint64_t seed = 1;
+    bool json = false;
+};
+
+std::string num(double v, int digits = 4) {
+    std::ostringstream os;
+    os << std::setprecision(digits) << v;
+    return os.str();
+}
+
+std::string signed_num(double v, int digits = 3) { return (v >= 0 ? "+" : "") + num(v, digits); }
+
+std::string days(double v) {
+    std::ostringstream os;
+    os << std::fixed << std::setprecision(0) << v;
+    return os.str();
+}
+
+std::string latest_text(const pg::ParameterTrend& p) {
+    if (p.series.points.empty()) return "-";
+    const auto& last = p.series.points.back();
+    return num(last.value) + " [" + num(last.value - kZ95 * last.std_error) + ", " + num(last.value + kZ95 * last.std_error) + "]";
+}
+
+std::string trend_text(const pg::ParameterTrend& p) {
+    if (!p.trend_per_period) return "-";
+    return signed_num(*p.trend_per_period) + " +/- " + num(*p.trend_per_period_se, 2);
+}
+
+std::string crossing_text(const pg::ParameterTrend& p) {
+    if (!p.crossing_days_since_epoch || p.rul.status != pg::RulStatus::Predicted) return "-";
+    return pg::format_utc_date(*p.crossing_days_since_epoch);
+}
+
+std::string interval_text(const pg::RulEstimate& r) {
+    const std::string lo = r.rul_lower_days ? days(*r.rul_lower_days) : "> " + days(r.horizon_days);
+    const std::string hi = r.rul_upper_days ? days(*r.rul_upper_days) : "> " + days(r.horizon_days);
+    return "[" + lo + ", " + hi + "]";
+}
+
+std::string rul_text(const pg::ParameterTrend& p) {
+    const pg::RulEstimate& r = p.rul;
+    switch (r.status) {
+        case pg::RulStatus::Predicted: return days(*r.rul_days) + " " + interval_text(r);
+        case pg::RulStatus::AlreadyExceeded: return "0 (limit exceeded at session " + std::to_string(*r.exceeded_session_id) + ")";
+        case pg::RulStatus::NoCrossing:
+            return "> " + days(r.horizon_days) + (r.rul_lower_days ? " (90 % lower bound " + days(*r.rul_lower_days) + ")" : "");
+        case pg::RulStatus::NoLimit: return "- (no limit)";
+        case pg::RulStatus::InsufficientData: return "- (insufficient data)";
+    }
+    return "-";
+}
+
+void print_text(std::ostream& os, const pg::TrendReport& r) {
+    os << "emadiag trend: tail " << r.tail_number << ", phase " << r.phase << ": " << r.sessions_in_phase << " of " << r.sessions_total
+       << " test sessions";
+    if (r.origin_days_since_epoch) {
+        os << ", day 0 = " << r.origin_utc;
+        if (r.last_session_days_since_epoch)
+            os << ", last session day " << days(*r.last_session_days_since_epoch - *r.origin_days_since_epoch) << " ("
+               << pg::format_utc_date(*r.last_session_days_since_epoch) << ")";
+    }
+    os << "\nmeasurements: inverse-variance mean of each session's physics findings; intervals: latest 95 %, RUL 90 % ("
+       << r.rul_options.draws << " Monte Carlo draws, seed " << r.rul_options.seed << "); horizon " << days(r.rul_options.horizon_days)
+       << " days after the last session\n\n";
+    os << std::left << std::setw(8) << "param" << std::setw(10) << "sessions" << std::setw(29) << "latest [95 %]" << std::setw(24)
+       << "trend per 100 d (se)" << std::setw(12) << "model" << std::setw(12) << "crossing" << "RUL days [90 %]\n";
+    for (const auto& p : r.parameters) {
+        os << std::left << std::setw(8) << p.series.parameter << std::setw(10) << p.series.points.size() << std::setw(29) << latest_text(p)
+           << std::setw(24) << trend_text(p) << std::setw(12) << (p.has_fit ? pg::to_string(p.fits.choice.model) : "-")
+           << std::setw(12) << crossing_text(p) << rul_text(p) << '\n';
+    }
+    for (const auto& p : r.parameters) {
+        os << '\n' << p.series.parameter;
+        if (p.series.limit) os << " (limit " << pg::to_string(p.series.limit->side) << ' ' << num(p.series.limit->value) << ")";
+        os << ": " << p.rul.summary << '\n';
+        if (p.has_fit) {
+            os << "  model: " << p.fits.choice.reason << '\n';
+            for (const auto* f : {&p.fits.linear, &p.fits.log_linear}) {
+                if (!f->fitted) {
+                    os << "  " << pg::to_string(f->model) << ": not fitted (" << f->note << ")\n";
+                    continue;
+                }
+                os << "  " << std::setw(12) << (std::string(pg::to_string(f->model)) + ":")
+                   << (f->model == pg::DegradationModel::Linear ? "y" : "ln y")
+                   << " = " << num(f->a, 6) << " " << (f->b >= 0 ? "+ " : "- ") << num(std::abs(f->b), 4) << " t/day"
+                   << "   (se b " << num(std::sqrt(f->covariance(1, 1)), 2) << ", reduced chi2 " << num(f->reduced_chi2, 3)
+                   << ", AICc " << (f->aicc ? num(*f->aicc, 5) : "-") << ")\n";
+            }
+        }
+        if (p.rul.interval_computed && p.rul.status != pg::RulStatus::AlreadyExceeded) {
+            os << "  RUL 90 % interval " << interval_text(p.rul) << " days from " << p.rul.draws << " draws: " << p.rul.draws_beyond_horizon
+               << " beyond the horizon, " << p.rul.draws_already_crossed << " already crossed\n";
+        }
+        if (!p.series.points.empty()) {
+            os << "  " << std::right << std::setw(8) << "day" << std::setw(12) << "value" << std::setw(11) << "se" << std::setw(9) << "session"
+               << "  started_utc           from\n";
+            for (const auto& pt : p.series.points) {
+                std::string from;
+                for (std::size_t i = 0; i < pt.estimators.size(); ++i) from += (i ? ", " : "") + pt.estimators[i];
+                os << "  " << std::right << std::setw(8) << days(pt.t_days) << std::setw(12) << num(pt.value, 5) << std::setw(11)
+                   << num(pt.std_error, 2) << std::setw(9) << pt.session_id << "  " << std::left << std::setw(22) << pt.started_utc << from
+                   << '\n';
+            }
+        }
+        for (const auto& n : p.series.notes) os << "  note: " << n << '\n';
+    }
+}
+
+const bool registered = register_command(Command{
+    "trend", "Trend report of one aircraft: per parameter the degradation trend, predicted limit crossing and remaining useful life",
+    [](CLI::App& sub) -> std::function<int()> {
+        auto o = std::make_shared<TrendCliOptions>();
+        sub.add_option("--db", o->db, "Maintenance database (SQLite) with the test sessions")->required()->check(CLI::ExistingFile);
+        sub.add_option("--tail", o->tail, "Aircraft tail number")->required();
+        sub.add_option("--phase", o->phase, "Sessions of this phase: pre-flight, post-flight or all")
+            ->capture_default_str()
+            ->check(CLI::IsMember({"pre-flight", "post-flight", pg::kPhaseAll}));
+        sub.add_option("--horizon-days", o->horizon_days, "How far after the last session a crossing is predicted, days")->capture_default_str();
+        sub.add_option("--draws", o->draws, "Monte Carlo draws for the RUL interval")->capture_default_str();
+        sub.add_option("--seed", o->seed, "Seed of the Monte Carlo draws (recorded in the report)")->capture_default_str();
+        sub.add_flag("--json", o->json, "JSON report (docs/trend-report.md)");
+        return [o] {
+            pg::TrendOptions t;
+            t.phase = o->phase;
+            t.rul.horizon_days = o->horizon_days;
+            t.rul.draws = o->draws;
+            t.rul.seed = o->seed;
+            db::Database database(o->db);
+            const pg::TrendReport report = pg::load_trend_report(database, o->tail, t);
+            if (o->json) {
+                std::cout << pg::to_json(report).dump(2) << '\n';
+            } else {
+                print_text(std::cout, report);
+            }
+            return 0;
+        };
+    }});
+
+}  // namespace
+}  // namespace emadiag::cli
