@@ -1,0 +1,232 @@
+// GCC 12 reports false -Wmaybe-uninitialized inside Eigen's AVX-512 kernels (matrix-vector product).
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#include "discovery/resimulation.hpp"
+
+#include "core/emadiag_error.hpp"
+#include "core/sim_run.hpp"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+
+namespace emadiag::discovery {
+namespace {
+
+/// Range and finite-difference step of each fittable parameter (ranges: sim_backend ema_params.cpp).
+struct ParamSpec {
+    const char* name;
+    double lo, hi;
+    double step_abs;  ///< finite-difference step floor
+};
+constexpr ParamSpec kSpecs[] = {
+    {"fdj_nm", 0.0, 10.0, 2e-4},
+    {"eta_o", 0.3, 1.0, 2e-3},
+    {"viscous", 0.0, 1.0, 1e-7},
+    {"stribeck_amplitude", 0.0, 10.0, 2e-3},
+    {"stribeck_speed", 1.0, 1e4, 1.0},
+    {"spall_amplitude", 0.0, 10.0, 2e-3},
+    {"spall_center", -90.0, 90.0, 0.02},
+    {"spall_width", 0.05, 90.0, 0.02},
+    {"ripple_amplitude", 0.0, 10.0, 2e-3},
+    {"current_gain_error", -0.5, 0.5, 2e-4},
+    {"hinge_offset", -5000.0, 5000.0, 0.5},
+    {"true_inertia", 1e-7, 1.0, 1e-7},
+};
+/// Relative finite-difference step (the simulator's chatter makes smaller steps noisy).
+constexpr double kStepRel = 0.02;
+
+const ParamSpec& spec(const std::string& name) {
+    for (const auto& s : kSpecs) {
+        if (name == s.name) return s;
+    }
+    throw EmadiagError("discovery: parameter '" + name + "' cannot be fitted");
+}
+
+double rms(double sum_sq, std::size_t n) { return n ? std::sqrt(sum_sq / static_cast<double>(n)) : 0.0; }
+
+}  // namespace
+
+double get_parameter(const sim::EmaParams& p, const std::string& name) {
+    if (name == "fdj_nm") return p.fdj_nm;
+    if (name == "eta_o") return p.eta_o;
+    (void)spec(name);
+    return p.effects.get(name);
+}
+
+void set_parameter(sim::EmaParams& p, const std::string& name, double value) {
+    const ParamSpec& s = spec(name);
+    value = std::clamp(value, s.lo, s.hi);
+    if (name == "fdj_nm") {
+        p.fdj_nm = value;
+        p.fsj_nm = std::max(p.fsj_nm, p.fdj_nm);
+    } else if (name == "eta_o") {
+        p.eta_o = value;
+        p.eta_a = sim::eta_a_from_eta_o(value, p.tau);
+    } else {
+        p.effects.set(name, value);
+    }
+}
+
+sim::SimConfig resim_config(const Run& run, const sim::EmaParams& params) {
+    sim::SimConfig c;
+    c.params = params;
+    c.params.k_t_nm_per_a = run.constants.k_t_nm_per_a;
+    c.params.j_kgm2 = run.constants.j_kgm2;
+    c.params.tau = run.constants.tau;
+    c.load_case = sim::parse_load_case(run.load_case);
+    c.sequence = sim::parse_sequence(run.sequence);
+    c.noise = sim::NoiseProfile::None;
+    c.duration_s = static_cast<double>(run.samples.size()) * sim::kSamplePeriodS;
+    return c;
+}
+
+Run resimulate(const Run& run, const sim::EmaParams& params) {
+    const sim::SimConfig c = resim_config(run, params);
+    const sim::SimResult r = sim::simulate(c);
+    if (!r.finite) throw EmadiagError("discovery: the re-simulation diverged (NaN or inf)");
+    Run out = make_run(c, r);
+    out.constants = run.constants;
+    if (out.samples.size() != run.samples.size()) {
+        throw EmadiagError("discovery: the re-simulation has " + std::to_string(out.samples.size()) +
+                           " samples, the run " + std::to_string(run.samples.size()));
+    }
+    return out;
+}
+
+std::vector<char> comparison_mask(const RunSignals& measured, const RunSignals& model) {
+    const std::size_t n = std::min(measured.size(), model.size());
+    std::vector<char> kink(n, 0);
+    for (const auto* w : {&model.speed_rad_s, &measured.speed_rad_s}) {
+        for (std::size_t k = 1; k + 1 < n; ++k) {
+            if (std::abs((*w)[k + 1] - 2 * (*w)[k] + (*w)[k - 1]) > kKinkSecondDifferenceRadS) kink[k] = 1;
+        }
+    }
+    std::vector<char> m(measured.size(), 0);
+    for (std::size_t k = 1; k + 1 < n; ++k) {
+        m[k] = measured.slipping[k] && model.slipping[k] && !kink[k - 1] && !kink[k] && !kink[k + 1];
+    }
+    return m;
+}
+
+ErrorMetrics model_error(const RunSignals& a, const RunSignals& b, const std::vector<char>& mask) {
+    if (a.size() != b.size() || mask.size() != a.size()) {
+        throw EmadiagError("discovery: model and measurement differ in length (" + std::to_string(b.size()) +
+                           " and " + std::to_string(a.size()) + " samples)");
+    }
+    ErrorMetrics e;
+    e.samples = a.size();
+    double si = 0, sw = 0, sth = 0, st = 0, swin = 0;
+    std::size_t nwin = 0;
+    double acc = 0;
+    std::size_t in_win = 0;
+    for (std::size_t k = 0; k < a.size(); ++k) {
+        si += std::pow(a.current_a[k] - b.current_a[k], 2);
+        sw += std::pow(a.speed_rad_s[k] - b.speed_rad_s[k], 2);
+        sth += std::pow(a.theta_m_rad[k] - b.theta_m_rad[k], 2);
+        if (mask[k]) {
+            const double d = a.residual_torque_nm[k] - b.residual_torque_nm[k];
+            st += d * d;
+            ++e.torque_samples;
+            acc += d;
+            if (++in_win == kMetricWindowSamples) {
+                swin += std::pow(acc / static_cast<double>(in_win), 2);
+                ++nwin;
+                acc = 0;
+                in_win = 0;
+            }
+        } else {
+            acc = 0;  // a window is consecutive samples only
+            in_win = 0;
+        }
+    }
+    e.current_rms_a = rms(si, a.size());
+    e.speed_rms_rad_s = rms(sw, a.size());
+    e.theta_rms_rad = rms(sth, a.size());
+    e.residual_torque_rms_nm = rms(st, e.torque_samples);
+    e.residual_torque_window_rms_nm = rms(swin, nwin);
+    return e;
+}
+
+FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
+                              const std::vector<std::string>& names, const std::vector<char>& mask) {
+    FitResult fr;
+    std::vector<std::size_t> rows;
+    for (std::size_t k = 0; k < mask.size(); ++k) {
+        if (mask[k]) rows.push_back(k);
+    }
+    const auto m = static_cast<Eigen::Index>(rows.size());
+    const auto np = static_cast<Eigen::Index>(names.size());
+    auto residual = [&](const sim::EmaParams& p) {
+        ++fr.simulations;
+        const RunSignals sim_s = run_signals(resimulate(run, p));
+        Eigen::VectorXd e(m);
+        for (Eigen::Index i = 0; i < m; ++i) {
+            const std::size_t k = rows[static_cast<std::size_t>(i)];
+            e(i) = measured.residual_torque_nm[k] - sim_s.residual_torque_nm[k];
+        }
+        return e;
+    };
+    sim::EmaParams p = start;
+    Eigen::VectorXd e = residual(p);
+    fr.cost_start = e.squaredNorm();
+    double cost = fr.cost_start;
+    double lambda = kFitStartDamping;
+    Eigen::MatrixXd jac(m, np);
+    for (int it = 0; it < kMaxFitIterations; ++it) {
+        fr.iterations = it + 1;
+        // Forward differences of the model's T_R (e = y - f, so df = -(e_step - e)).
+        for (Eigen::Index j = 0; j < np; ++j) {
+            const std::string& name = names[static_cast<std::size_t>(j)];
+            const ParamSpec& s = spec(name);
+            const double v = get_parameter(p, name);
+            double h = std::max(s.step_abs, kStepRel * std::abs(v));
+            if (v + h > s.hi) h = -h;
+            sim::EmaParams q = p;
+            set_parameter(q, name, v + h);
+            const double actual = get_parameter(q, name) - v;
+            jac.col(j) = -(residual(q) - e) / actual;
+        }
+        const Eigen::MatrixXd jtj = jac.transpose() * jac;
+        const Eigen::VectorXd jte = jac.transpose() * e;
+        bool improved = false;
+        for (int tries = 0; tries < 4 && !improved; ++tries) {
+            Eigen::MatrixXd a = jtj;
+            a.diagonal() += lambda * jtj.diagonal().cwiseMax(1e-30);
+            const Eigen::VectorXd delta = a.ldlt().solve(jte);
+            sim::EmaParams q = p;
+            for (Eigen::Index j = 0; j < np; ++j) {
+                const std::string& name = names[static_cast<std::size_t>(j)];
+                set_parameter(q, name, get_parameter(p, name) + delta(j));
+            }
+            const Eigen::VectorXd eq = residual(q);
+            const double cq = eq.squaredNorm();
+            if (cq < cost) {
+                const double gain = (cost - cq) / cost;
+                p = q;
+                e = eq;
+                cost = cq;
+                lambda = std::max(lambda / 10.0, 1e-9);
+                improved = true;
+                if (gain < kFitRelativeTolerance) it = kMaxFitIterations;  // converged
+            } else {
+                lambda *= 10.0;
+            }
+        }
+        if (!improved) break;
+    }
+    fr.params = p;
+    fr.cost_end = cost;
+    // Standard errors from the last Jacobian: cov = s^2 (J^T J)^-1, s^2 = cost / (m - p).
+    const Eigen::MatrixXd jtj = jac.transpose() * jac;
+    const double s2 = cost / std::max<double>(1.0, static_cast<double>(m - np));
+    const Eigen::MatrixXd cov = s2 * jtj.completeOrthogonalDecomposition().pseudoInverse();
+    for (Eigen::Index j = 0; j < np; ++j) {
+        const std::string& name = names[static_cast<std::size_t>(j)];
+        fr.values.push_back({name, get_parameter(p, name), std::sqrt(std::max(0.0, cov(j, j)))});
+    }
+    return fr;
+}
+
+}  // namespace emadiag::discovery

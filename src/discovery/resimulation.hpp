@@ -1,0 +1,80 @@
+#pragma once
+// Re-simulating a run with a candidate model, the model error, and the fit of model parameters by
+// re-simulation (docs/discovery.md "Fit"). The run's case, sequence, length and constants (k_t,
+// J, tau) come from the Run; noise is none; nothing is read from true_* / effect_* metadata.
+#include "core/run.hpp"
+#include "discovery/run_signals.hpp"
+#include "emadiag/sim/ema_params.hpp"
+#include "emadiag/sim/simulator.hpp"
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace emadiag::discovery {
+
+/// Consecutive torque-residual samples averaged for the window metric (the telescoped mean of
+/// residual_torque.hpp: its derivative noise falls as 1/n).
+inline constexpr std::size_t kMetricWindowSamples = 8;
+/// Levenberg-Marquardt iterations of a re-simulation fit, and the starting damping.
+inline constexpr int kMaxFitIterations = 6;
+inline constexpr double kFitStartDamping = 1e-3;
+/// The fit stops when an accepted step lowers the cost by less than this fraction.
+inline constexpr double kFitRelativeTolerance = 1e-4;
+
+/// The error of a model against the measurement (the same samples before and after).
+struct ErrorMetrics {
+    double current_rms_a = 0;                  ///< all samples
+    double residual_torque_rms_nm = 0;         ///< measured T_R - model T_R, over the torque samples
+    double residual_torque_window_rms_nm = 0;  ///< the same, means of kMetricWindowSamples samples
+    double speed_rms_rad_s = 0;                ///< all samples
+    double theta_rms_rad = 0;                  ///< all samples
+    std::size_t samples = 0;
+    std::size_t torque_samples = 0;
+};
+
+/// The simulation of the run's case and sequence with `params`, noise none.
+[[nodiscard]] sim::SimConfig resim_config(const Run& run, const sim::EmaParams& params);
+/// The re-simulated run (make_run), with the measured run's constants so eq. 7 is the same.
+[[nodiscard]] Run resimulate(const Run& run, const sim::EmaParams& params);
+
+/// Comparison samples are slipping in both runs and away from kinks of either speed (second
+/// difference above this at the sample or a neighbour: the differentiator of eq. 7 fails there,
+/// residual_torque.hpp "Limits"). 3 rad/s is 6 sd of the second difference of `typical` speed
+/// noise (sqrt(6) 0.2 rad/s); a kink at I_max changes the speed step by about 12 rad/s.
+/// Speeds are NOT required to agree: T_R is the friction torque in both runs whatever their
+/// trajectories, and an inertia error shows precisely where they disagree.
+inline constexpr double kKinkSecondDifferenceRadS = 3.0;
+
+/// The comparison samples of `measured` and `model` (see the constants above).
+[[nodiscard]] std::vector<char> comparison_mask(const RunSignals& measured, const RunSignals& model);
+/// Error of `model` against `measured` (same length; throws EmadiagError otherwise).
+[[nodiscard]] ErrorMetrics model_error(const RunSignals& measured, const RunSignals& model,
+                                       const std::vector<char>& mask);
+
+/// A fitted parameter: "fdj_nm", "eta_o" or a sim::Effects name.
+struct FittedValue {
+    std::string name;
+    double value = 0;
+    double std_error = 0;
+};
+
+struct FitResult {
+    sim::EmaParams params;
+    std::vector<FittedValue> values;
+    double cost_start = 0, cost_end = 0;  ///< sum of squared torque residuals
+    int iterations = 0;
+    int simulations = 0;
+};
+
+/// Levenberg-Marquardt on the torque residual (measured T_R - re-simulated T_R over `mask`),
+/// varying the named parameters of `start` (finite-difference Jacobian on the real simulator).
+/// Parameters stay inside the simulator's allowed ranges; FSJ is kept >= FDJ.
+[[nodiscard]] FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
+                                            const std::vector<std::string>& names, const std::vector<char>& mask);
+
+/// Reads / writes one fittable parameter of EmaParams by name (eta_o also sets eta_a by eq. 4).
+[[nodiscard]] double get_parameter(const sim::EmaParams& p, const std::string& name);
+void set_parameter(sim::EmaParams& p, const std::string& name, double value);
+
+}  // namespace emadiag::discovery
