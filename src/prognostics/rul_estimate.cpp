@@ -76,12 +76,7 @@ RulEstimate estimate_rul(const std::vector<TrendPoint>& points, const Degradatio
     r.horizon_days = options.horizon_days;
     r.seed = options.seed;
     if (!points.empty()) r.t_last_days = points.back().t_days;
-    if (!limit) {
-        r.status = RulStatus::NoLimit;
-        r.summary = "no limit in the findings; no crossing to predict";
-        return r;
-    }
-    if (!points.empty() && is_beyond(points.back().value, *limit)) {
+    if (limit && !points.empty() && is_beyond(points.back().value, *limit)) {
         const TrendPoint& last = points.back();
         r.status = RulStatus::AlreadyExceeded;
         r.exceeded_session_id = last.session_id;
@@ -94,6 +89,11 @@ RulEstimate estimate_rul(const std::vector<TrendPoint>& points, const Degradatio
     if (!fit.fitted) {
         r.status = RulStatus::InsufficientData;
         r.summary = fit.note;
+        return r;
+    }
+    if (!limit) {
+        r.status = RulStatus::NoLimit;
+        r.summary = "no limit in the findings; no crossing to predict";
         return r;
     }
 

@@ -62,8 +62,9 @@ struct RulEstimate {
     std::optional<std::int64_t> exceeded_session_id;
 };
 
-/// The RUL of a series under `fit` (the chosen model). `fit` may be unfitted (insufficient data);
-/// the already-exceeded check runs first, on the last point, whatever the number of points.
+/// The RUL of a series under `fit` (the chosen model). `fit` may be unfitted (insufficient data).
+/// In this order: the last point beyond the limit (whatever the number of points), no fit, no limit,
+/// then the crossing and its interval.
 [[nodiscard]] RulEstimate estimate_rul(const std::vector<TrendPoint>& points, const DegradationFit& fit,
                                        const std::optional<TrendLimit>& limit, const RulOptions& options);
 
