@@ -92,7 +92,9 @@ void print_text(std::ostream& os, const pg::TrendReport& r) {
     }
     os << "\nmeasurements: inverse-variance mean of each session's physics findings; intervals: latest 95 %, RUL 90 % ("
        << r.rul_options.draws << " Monte Carlo draws, seed " << r.rul_options.seed << "); horizon " << days(r.rul_options.horizon_days)
-       << " days after the last session\n\n";
+       << " days after the last session\n";
+    for (const auto& n : r.notes) os << "note: " << n << '\n';
+    os << '\n';
     os << std::left << std::setw(8) << "param" << std::setw(10) << "sessions" << std::setw(29) << "latest [95 %]" << std::setw(24)
        << "trend per 100 d (se)" << std::setw(12) << "model" << std::setw(12) << "crossing" << "RUL days [90 %]\n";
     for (const auto& p : r.parameters) {

@@ -10,7 +10,7 @@
 namespace emadiag::prognostics {
 namespace {
 
-using nlohmann::json;
+using json = nlohmann::ordered_json;
 
 json optional_number(const std::optional<double>& v) { return v ? json(*v) : json(nullptr); }
 
@@ -75,6 +75,12 @@ TrendReport build_trend_report(const std::string& tail_number, const std::vector
         picked_days.push_back(all_days[i]);
     }
     r.sessions_in_phase = static_cast<int>(picked.size());
+    if (r.sessions_total == 0) {
+        r.notes.push_back("the tail has no test sessions (runs stored on their own are not test sessions)");
+    } else if (r.sessions_in_phase < r.sessions_total) {
+        r.notes.push_back(std::to_string(r.sessions_total - r.sessions_in_phase) + " of the tail's " + std::to_string(r.sessions_total) +
+                          " test sessions are of another phase and left out (--phase all keeps them)");
+    }
     double origin = 0;
     if (!all_days.empty()) {
         origin = *std::min_element(all_days.begin(), all_days.end());
@@ -175,6 +181,7 @@ json to_json(const TrendReport& r) {
         q["notes"] = p.series.notes;
         j["parameters"].push_back(std::move(q));
     }
+    j["notes"] = r.notes;
     return j;
 }
 

@@ -52,6 +52,7 @@ struct TrendReport {
     std::optional<double> last_session_days_since_epoch;  ///< the last session in the phase
     RulOptions rul_options;
     std::vector<ParameterTrend> parameters;  ///< FDJ_Nm, FSJ_Nm, eta_O, eta_A
+    std::vector<std::string> notes;          ///< about the report as a whole (e.g. no session in the phase)
 };
 
 /// One parameter's trend from its series.
@@ -70,7 +71,7 @@ struct TrendReport {
 /// tails the database holds when it has no such aircraft.
 [[nodiscard]] TrendReport load_trend_report(db::Database& database, const std::string& tail_number, const TrendOptions& options);
 
-/// The documented JSON form (schema kTrendSchema, version kTrendSchemaVersion).
-[[nodiscard]] nlohmann::json to_json(const TrendReport& report);
+/// The documented JSON form (schema kTrendSchema, version kTrendSchemaVersion), keys in document order.
+[[nodiscard]] nlohmann::ordered_json to_json(const TrendReport& report);
 
 }  // namespace emadiag::prognostics

@@ -76,6 +76,7 @@ TEST(TrendReport, ThePhaseFilterKeepsTheTimeAxisOfTheTail) {
     const TrendReport r = load_trend_report(database, "N123EM", o);
     EXPECT_EQ(r.sessions_total, 8);
     EXPECT_EQ(r.sessions_in_phase, 4);
+    EXPECT_THAT(r.notes, ElementsAre(HasSubstr("4 of the tail's 8 test sessions are of another phase and left out")));
     const auto& pts = r.parameters[0].series.points;
     ASSERT_EQ(pts.size(), 4u);
     EXPECT_NEAR(pts.front().t_days, 30.0, kDayTolerance);  // day 0 is the first (pre-flight) session
@@ -106,7 +107,7 @@ TEST(TrendReport, ABadPhaseIsNamed) {
 TEST(TrendReport, JsonCarriesTheDocumentedFields) {
     db::Database database(":memory:");
     store_history(database, "N123EM", 8, false);
-    const nlohmann::json j = to_json(load_trend_report(database, "N123EM", {}));
+    const auto j = to_json(load_trend_report(database, "N123EM", {}));
     EXPECT_EQ(j.at("schema"), "emadiag-trend");
     EXPECT_EQ(j.at("version"), 1);
     EXPECT_EQ(j.at("tail_number"), "N123EM");
