@@ -80,7 +80,8 @@ int main(int argc, char** argv) {
     columns.push_back("error");
     std::map<std::string, std::map<std::string, int>> confusion;
     std::map<std::string, std::vector<double>> coef_err, ratio_i, ratio_t, ratio_tw;
-    std::map<std::string, int> extra;  // further effects added after the first
+    std::map<std::string, int> extra;
+    std::vector<double> area_err;  // Stribeck amplitude x speed  // further effects added after the first
     std::uint64_t run_seed = seed * 1000;
     for (const auto& kind : kinds) {
         for (int r = 0; r < runs; ++r) {
@@ -109,6 +110,13 @@ int main(int argc, char** argv) {
                 if (found == kind && !t.key.empty()) {
                     const double v = rep.term_value(t.key).value_or(NAN);
                     coef_err[kind].push_back(std::abs(v - t.value) / std::abs(t.value));
+                    if (kind == "stribeck") {
+                        // The well-determined combination: the extra friction integrated over speed,
+                        // amplitude x w_s x sqrt(pi).
+                        const double area = v * rep.term_value("stribeck_speed").value_or(NAN);
+                        const double true_area = t.value * t.effects[1].second;
+                        area_err.push_back(std::abs(area - true_area) / true_area);
+                    }
                     char b[64];
                     std::snprintf(b, sizeof b, "%.4g", v);
                     fitted = b;
@@ -146,6 +154,8 @@ int main(int argc, char** argv) {
                     coef_err[kind].empty() ? NAN : *std::max_element(coef_err[kind].begin(), coef_err[kind].end()),
                     coef_err[kind].size(), median(ratio_i[kind]), median(ratio_t[kind]), median(ratio_tw[kind]));
     }
+    std::printf("  stribeck amplitude x w_s: median relative error %.3f (max %.3f, n %zu)\n", median(area_err),
+                area_err.empty() ? NAN : *std::max_element(area_err.begin(), area_err.end()), area_err.size());
     std::printf("false discoveries on clean runs: %d of %d\n", runs - confusion["none"]["none"], runs);
     return 0;
 }

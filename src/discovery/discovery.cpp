@@ -202,7 +202,9 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
         }
         std::vector<std::string> names = health_names;
         for (const auto& n : fitted_sim_effects(win.shape.kind)) names.push_back(n);
-        const FitResult fit = fit_by_resimulation(run, s, start, names, mask);
+        // Ripple changes sign within a window of samples: it is fitted per sample.
+        const FitResult fit = fit_by_resimulation(run, s, start, names, mask,
+                                                  win.shape.kind == EffectKind::Ripple ? 1 : kFitWindowSamples);
         step.added = win.shape;
         step.fitted = fit.values;
         step.simulations = fit.simulations;

@@ -35,7 +35,7 @@ constexpr ParamSpec kSpecs[] = {
     {"true_inertia", 1e-7, 1.0, 1e-7},
 };
 /// Relative finite-difference step (the simulator's chatter makes smaller steps noisy).
-constexpr double kStepRel = 0.02;
+constexpr double kStepRel = 0.005;
 
 const ParamSpec& spec(const std::string& name) {
     for (const auto& s : kSpecs) {
@@ -150,21 +150,31 @@ ErrorMetrics model_error(const RunSignals& a, const RunSignals& b, const std::ve
 }
 
 FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
-                              const std::vector<std::string>& names, const std::vector<char>& mask) {
+                              const std::vector<std::string>& names, const std::vector<char>& mask,
+                              std::size_t window_samples) {
     FitResult fr;
-    std::vector<std::size_t> rows;
+    // Rows: sums of the torque residual over windows of up to kFitWindowSamples consecutive masked
+    // samples (the derivative noise of eq. 7 telescopes in a window sum).
+    std::vector<std::vector<std::size_t>> windows;
     for (std::size_t k = 0; k < mask.size(); ++k) {
-        if (mask[k]) rows.push_back(k);
+        if (!mask[k]) continue;
+        if (windows.empty() || windows.back().size() >= window_samples || windows.back().back() + 1 != k) {
+            windows.emplace_back();
+        }
+        windows.back().push_back(k);
     }
-    const auto m = static_cast<Eigen::Index>(rows.size());
+    const auto m = static_cast<Eigen::Index>(windows.size());
     const auto np = static_cast<Eigen::Index>(names.size());
     auto residual = [&](const sim::EmaParams& p) {
         ++fr.simulations;
         const RunSignals sim_s = run_signals(resimulate(run, p));
         Eigen::VectorXd e(m);
         for (Eigen::Index i = 0; i < m; ++i) {
-            const std::size_t k = rows[static_cast<std::size_t>(i)];
-            e(i) = measured.residual_torque_nm[k] - sim_s.residual_torque_nm[k];
+            double sum = 0;
+            for (std::size_t k : windows[static_cast<std::size_t>(i)]) {
+                sum += measured.residual_torque_nm[k] - sim_s.residual_torque_nm[k];
+            }
+            e(i) = sum;
         }
         return e;
     };

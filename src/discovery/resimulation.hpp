@@ -16,8 +16,10 @@ namespace emadiag::discovery {
 /// Consecutive torque-residual samples averaged for the window metric (the telescoped mean of
 /// residual_torque.hpp: its derivative noise falls as 1/n).
 inline constexpr std::size_t kMetricWindowSamples = 8;
+/// Consecutive masked samples summed into one row of the fit.
+inline constexpr std::size_t kFitWindowSamples = 8;
 /// Levenberg-Marquardt iterations of a re-simulation fit, and the starting damping.
-inline constexpr int kMaxFitIterations = 6;
+inline constexpr int kMaxFitIterations = 12;
 inline constexpr double kFitStartDamping = 1e-3;
 /// The fit stops when an accepted step lowers the cost by less than this fraction.
 inline constexpr double kFitRelativeTolerance = 1e-4;
@@ -62,16 +64,19 @@ struct FittedValue {
 struct FitResult {
     sim::EmaParams params;
     std::vector<FittedValue> values;
-    double cost_start = 0, cost_end = 0;  ///< sum of squared torque residuals
+    double cost_start = 0, cost_end = 0;  ///< sum of squared window sums of the torque residual
     int iterations = 0;
     int simulations = 0;
 };
 
-/// Levenberg-Marquardt on the torque residual (measured T_R - re-simulated T_R over `mask`),
+/// Levenberg-Marquardt on the torque residual (measured T_R - re-simulated T_R over `mask`, summed
+/// over windows of kFitWindowSamples consecutive samples),
 /// varying the named parameters of `start` (finite-difference Jacobian on the real simulator).
 /// Parameters stay inside the simulator's allowed ranges; FSJ is kept >= FDJ.
+/// `window_samples` = 1 fits per sample (for a signature that changes within a window: ripple).
 [[nodiscard]] FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
-                                            const std::vector<std::string>& names, const std::vector<char>& mask);
+                                            const std::vector<std::string>& names, const std::vector<char>& mask,
+                                            std::size_t window_samples = kFitWindowSamples);
 
 /// Reads / writes one fittable parameter of EmaParams by name (eta_o also sets eta_a by eq. 4).
 [[nodiscard]] double get_parameter(const sim::EmaParams& p, const std::string& name);

@@ -1,0 +1,218 @@
+// Discovery (src/discovery/discovery.hpp) on DYN case B runs (0.5 s) simulated with an effect the
+// model was never told about: the effect is named, its coefficient is close to the truth and the
+// error falls; clean runs add nothing; the true_* / effect_* header keys are not read; bad runs
+// are clear errors. Tolerances and ratios are from the figures measured when this was written
+// (docs/discovery.md), with margin.
+#include "core/emadiag_error.hpp"
+#include "core/run_csv.hpp"
+#include "core/sim_run.hpp"
+#include "discovery/candidate_effect.hpp"
+#include "discovery/discovery.hpp"
+#include "discovery/effect_screen.hpp"
+#include "discovery/run_signals.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <iostream>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace {
+
+using emadiag::EmadiagError;
+using RunT = emadiag::Run;
+using emadiag::discovery::DiscoveryReport;
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+using ::testing::IsEmpty;
+using ::testing::ThrowsMessage;
+
+using Effects = std::vector<std::pair<std::string, double>>;
+
+RunT simulated_run(const Effects& effects, emadiag::sim::NoiseProfile noise, std::uint64_t seed) {
+    emadiag::sim::SimConfig c;
+    c.load_case = emadiag::sim::LoadCase::B;
+    c.sequence = emadiag::sim::Sequence::Dyn;
+    c.noise = noise;
+    c.seed = seed;
+    for (const auto& [name, value] : effects) c.params.effects.set(name, value);
+    return emadiag::make_run(c, emadiag::sim::simulate(c));
+}
+
+::testing::AssertionResult within(const char* what, double got, double truth, double rel_tol) {
+    const double err = std::abs(got - truth) / std::abs(truth);
+    if (err <= rel_tol) return ::testing::AssertionSuccess();
+    return ::testing::AssertionFailure() << what << ": fitted " << got << ", truth " << truth << ", relative error "
+                                         << err << " > " << rel_tol;
+}
+
+struct EffectCase {
+    const char* name;            ///< discovery effect name expected
+    Effects effects;             ///< simulated truth
+    const char* key;             ///< the sim effect compared
+    double rel_tol_none;         ///< coefficient tolerance, noise none
+    double rel_tol_typical;      ///< coefficient tolerance, noise typical
+    double min_ratio_none;       ///< error ratio before/after (T_R window means), noise none
+    double min_ratio_typical;    ///< the same, noise typical
+};
+
+// Measured (seeds 1-3): viscous 5e-5 none exact, typical <= 6 %, T_R-means ratio 4863 / 1.48-1.58;
+// stribeck 0.08 @ 50 rad/s none 3.4 % (the fit stops in the chatter), ratio 73 (typical: see below);
+// spall 0.06 none exact, typical <= 2.6 %, ratio 1.7e6 / 2.3-2.6;
+// current gain 0.04 none exact, typical <= 0.8 %, ratio 2.5e5 / 7.6-9.0.
+const EffectCase kCases[] = {
+    {"viscous", {{"viscous", 5e-5}}, "viscous", 0.01, 0.15, 100.0, 1.3},
+    {"stribeck", {{"stribeck_amplitude", 0.08}, {"stribeck_speed", 50.0}}, "stribeck_amplitude", 0.10, 0.0, 20.0, 0.0},
+    {"spall", {{"spall_amplitude", 0.06}, {"spall_center", -5.0}, {"spall_width", 1.0}}, "spall_amplitude", 0.01, 0.10,
+     100.0, 1.8},
+    {"current_gain_error", {{"current_gain_error", 0.04}}, "current_gain_error", 0.01, 0.03, 100.0, 5.0},
+};
+
+class DiscoverEffect : public ::testing::TestWithParam<EffectCase> {};
+
+TEST_P(DiscoverEffect, NamesAndFitsTheEffectOnANoiseFreeRun) {
+    const EffectCase& c = GetParam();
+    const DiscoveryReport r = emadiag::discovery::discover(simulated_run(c.effects, emadiag::sim::NoiseProfile::None, 1));
+    ASSERT_THAT(r.added_effects(), ElementsAre(c.name));
+    const double truth = c.effects.front().second;
+    EXPECT_TRUE(within(c.key, r.term_value(c.key).value(), truth, c.rel_tol_none));
+    const auto& m = r.model;
+    const double ratio = m.error_before.residual_torque_window_rms_nm / m.error_after.residual_torque_window_rms_nm;
+    std::cout << "[ figures  ] " << c.name << " noise none: fitted " << *r.term_value(c.key) << " (truth " << truth
+              << "), T_R-means error " << m.error_before.residual_torque_window_rms_nm << " -> "
+              << m.error_after.residual_torque_window_rms_nm << " N m (ratio " << ratio << "), current "
+              << m.error_before.current_rms_a << " -> " << m.error_after.current_rms_a << " A\n";
+    EXPECT_GE(ratio, c.min_ratio_none);
+    EXPECT_LT(m.error_after.current_rms_a, m.error_before.current_rms_a);
+}
+
+TEST_P(DiscoverEffect, NamesAndFitsTheEffectOnATypicalNoiseRun) {
+    const EffectCase& c = GetParam();
+    if (c.rel_tol_typical == 0.0) GTEST_SKIP() << "covered by StribeckOnTypicalNoise (amplitude x speed)";
+    for (std::uint64_t seed : {1u, 2u}) {
+        const DiscoveryReport r =
+            emadiag::discovery::discover(simulated_run(c.effects, emadiag::sim::NoiseProfile::Typical, seed));
+        ASSERT_THAT(r.added_effects(), ElementsAre(c.name)) << "seed " << seed;
+        const double truth = c.effects.front().second;
+        EXPECT_TRUE(within(c.key, r.term_value(c.key).value(), truth, c.rel_tol_typical)) << "seed " << seed;
+        const auto& m = r.model;
+        const double ratio = m.error_before.residual_torque_window_rms_nm / m.error_after.residual_torque_window_rms_nm;
+        std::cout << "[ figures  ] " << c.name << " noise typical seed " << seed << ": fitted " << *r.term_value(c.key)
+                  << ", T_R-means ratio " << ratio << ", current ratio "
+                  << m.error_before.current_rms_a / m.error_after.current_rms_a << '\n';
+        EXPECT_GE(ratio, c.min_ratio_typical) << "seed " << seed;
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Effects, DiscoverEffect, ::testing::ValuesIn(kCases),
+                         [](const ::testing::TestParamInfo<EffectCase>& i) { return std::string(i.param.name); });
+
+// With typical noise only a few samples see low speed: amplitude and w_s trade off along a valley,
+// and their product (the extra friction integrated over speed, / sqrt(pi)) is what the run
+// determines. Measured seeds 1 and 3: product error 4 % and 3 %; seed 2 finds nothing.
+TEST(DiscoverStribeck, OnTypicalNoiseTheAmplitudeTimesSpeedIsDetermined) {
+    constexpr double kAmplitudeNm = 0.08, kSpeedRadS = 50.0, kProductTol = 0.25;
+    const Effects fx = {{"stribeck_amplitude", kAmplitudeNm}, {"stribeck_speed", kSpeedRadS}};
+    const DiscoveryReport r = emadiag::discovery::discover(simulated_run(fx, emadiag::sim::NoiseProfile::Typical, 1));
+    ASSERT_THAT(r.added_effects(), ElementsAre("stribeck"));
+    const double product = r.term_value("stribeck_amplitude").value() * r.term_value("stribeck_speed").value();
+    EXPECT_TRUE(within("stribeck amplitude x speed", product, kAmplitudeNm * kSpeedRadS, kProductTol));
+}
+
+TEST(DiscoverOtherEffects, HingeOffsetInertiaAndRippleOnNoiseFreeRuns) {
+    constexpr double kTol = 0.01;
+    const struct {
+        const char* name;
+        Effects fx;
+        const char* key;
+    } cases[] = {{"hinge_offset", {{"hinge_offset", 80.0}}, "hinge_offset"},
+                 {"inertia", {{"true_inertia", 2e-4}}, "true_inertia"},
+                 {"ripple", {{"ripple_amplitude", 0.05}}, "ripple_amplitude"}};
+    for (const auto& c : cases) {
+        const DiscoveryReport r = emadiag::discovery::discover(simulated_run(c.fx, emadiag::sim::NoiseProfile::None, 1));
+        ASSERT_THAT(r.added_effects(), ElementsAre(c.name));
+        EXPECT_TRUE(within(c.key, r.term_value(c.key).value(), c.fx.front().second, kTol));
+    }
+}
+
+// Clean runs: nothing is added. The seeds are printed with the false-discovery count.
+TEST(DiscoverClean, NoEffectIsAddedToCleanRuns) {
+    constexpr std::uint64_t kFirstSeed = 101;
+    constexpr int kTypicalRuns = 6;
+    int false_discoveries = 0;
+    std::string found;
+    for (int i = 0; i < kTypicalRuns; ++i) {
+        const std::uint64_t seed = kFirstSeed + static_cast<std::uint64_t>(i);
+        const DiscoveryReport r = emadiag::discovery::discover(simulated_run({}, emadiag::sim::NoiseProfile::Typical, seed));
+        if (!r.added_effects().empty()) {
+            ++false_discoveries;
+            found += " seed " + std::to_string(seed) + ": " + r.added_effects().front();
+        }
+        EXPECT_EQ(r.model.error_after.current_rms_a, r.model.error_before.current_rms_a);
+    }
+    const DiscoveryReport none = emadiag::discovery::discover(simulated_run({}, emadiag::sim::NoiseProfile::None, 1));
+    EXPECT_THAT(none.added_effects(), IsEmpty());
+    std::cout << "[ figures  ] clean runs, noise typical, seeds " << kFirstSeed << ".." << kFirstSeed + kTypicalRuns - 1
+              << ": " << false_discoveries << " false discoveries of " << kTypicalRuns << found << '\n';
+    EXPECT_EQ(false_discoveries, 0) << found;
+}
+
+// Analysis never reads the simulator's true_* / effect_* metadata: the report is the same with
+// those header lines stripped from the CSV.
+TEST(DiscoverInputs, TrueAndEffectHeaderKeysAreNotRead) {
+    const RunT run = simulated_run({{"viscous", 5e-5}}, emadiag::sim::NoiseProfile::Typical, 7);
+    std::ostringstream full;
+    emadiag::write_run_csv(full, run);
+    ASSERT_THAT(full.str(), HasSubstr("# effect_viscous="));
+    ASSERT_THAT(full.str(), HasSubstr("# true_FDJ_Nm="));
+    std::istringstream in(full.str());
+    std::string stripped, line;
+    while (std::getline(in, line)) {
+        if (line.rfind("# true_", 0) == 0 || line.rfind("# effect_", 0) == 0) continue;
+        stripped += line + '\n';
+    }
+    std::istringstream a(full.str()), b(stripped);
+    const RunT with = emadiag::read_run_csv(a, "with.csv");
+    const RunT without = emadiag::read_run_csv(b, "without.csv");
+    ASSERT_LT(without.meta.size(), with.meta.size());
+    EXPECT_EQ(emadiag::discovery::discover(with).to_json().dump(), emadiag::discovery::discover(without).to_json().dump());
+}
+
+TEST(DiscoverInputs, TooFewSamplesIsAClearError) {
+    RunT run = simulated_run({}, emadiag::sim::NoiseProfile::None, 1);
+    run.samples.resize(10);
+    EXPECT_THAT([&] { (void)emadiag::discovery::discover(run); },
+                ThrowsMessage<EmadiagError>(HasSubstr("run has 10 samples; at least 20 are needed")));
+}
+
+TEST(DiscoverInputs, TooFewSlippingSamplesIsAClearError) {
+    RunT run = simulated_run({}, emadiag::sim::NoiseProfile::None, 1);
+    run.samples.resize(40);  // enough for the run checks, 20 ms: the shaft is still accelerating
+    EXPECT_THAT([&] { (void)emadiag::discovery::discover(run); },
+                ThrowsMessage<EmadiagError>(HasSubstr("too few slipping samples")));
+    // The screening's own limit, on a full run with a mask of 10 samples.
+    const RunT full = simulated_run({}, emadiag::sim::NoiseProfile::None, 1);
+    const auto s = emadiag::discovery::run_signals(full);
+    emadiag::discovery::ScreenInput in;
+    in.residual_nm.assign(s.size(), 0.0);
+    in.mask.assign(s.size(), 0);
+    for (std::size_t k = 100; k < 110; ++k) in.mask[k] = 1;
+    EXPECT_THAT([&] { (void)emadiag::discovery::screen_effects(s, in); },
+                ThrowsMessage<EmadiagError>(HasSubstr("10 comparison samples (slipping in the run and the model); at "
+                                                      "least 60 are needed")));
+}
+
+TEST(DiscoverInputs, NaNIsAClearErrorNamingRowAndColumn) {
+    RunT run = simulated_run({}, emadiag::sim::NoiseProfile::None, 1);
+    run.samples[11].current_a = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_THAT([&] { (void)emadiag::discovery::discover(run); },
+                ThrowsMessage<EmadiagError>(HasSubstr("sample row 12 (t_s=0.006): current_A is nan")));
+}
+
+}  // namespace
