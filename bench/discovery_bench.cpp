@@ -1,7 +1,9 @@
 // Discovery on seeded runs (docs/discovery.md "Figures"): N DYN case B runs per true effect with
 // random magnitudes, plus clean runs; prints the confusion matrix (true effect vs the first effect
 // discovered), the coefficient errors, the error ratios before/after, and the false discoveries.
-// Usage: discovery_bench [runs_per_effect=6] [seed=11] [noise=typical|none]
+// Spall centres are drawn inside the surface angles a DYN case B run visits (-11.9 to 3.4 deg): a
+// spall elsewhere leaves no trace in the run and cannot be found.
+// Usage: discovery_bench [runs_per_effect=6] [seed=11] [noise=typical|none] [effects=all|none,viscous,...]
 #include "core/sim_run.hpp"
 #include "discovery/candidate_effect.hpp"
 #include "discovery/discovery.hpp"
@@ -40,7 +42,7 @@ Truth draw(const std::string& kind, std::mt19937_64& g) {
     } else if (kind == "stribeck") {
         t.effects = {{"stribeck_amplitude", uniform(g, 0.03, 0.1)}, {"stribeck_speed", uniform(g, 30, 100)}};
     } else if (kind == "spall") {
-        t.effects = {{"spall_amplitude", uniform(g, 0.03, 0.1)}, {"spall_center", uniform(g, -10, 12)},
+        t.effects = {{"spall_amplitude", uniform(g, 0.03, 0.1)}, {"spall_center", uniform(g, -10, 2)},
                      {"spall_width", uniform(g, 0.5, 2.0)}};
     } else if (kind == "ripple") {
         t.effects = {{"ripple_amplitude", uniform(g, 0.03, 0.1)}, {"ripple_periods", 6.0}};
@@ -74,9 +76,19 @@ int main(int argc, char** argv) {
     std::printf("discovery_bench: %d DYN case B runs per effect, seed %llu, noise %s\n", runs,
                 static_cast<unsigned long long>(seed), noise.c_str());
     std::mt19937_64 g(seed);
-    const std::vector<std::string> kinds = {"none",   "viscous",            "stribeck",     "spall",
-                                            "ripple", "current_gain_error", "hinge_offset", "inertia"};
-    std::vector<std::string> columns = kinds;
+    std::vector<std::string> kinds = {"none",   "viscous",            "stribeck",     "spall",
+                                      "ripple", "current_gain_error", "hinge_offset", "inertia"};
+    if (argc > 4 && std::string(argv[4]) != "all") {
+        kinds.clear();
+        std::string list = argv[4];
+        for (std::size_t a = 0; a <= list.size();) {
+            const std::size_t b = std::min(list.find(',', a), list.size());
+            kinds.push_back(list.substr(a, b - a));
+            a = b + 1;
+        }
+    }
+    std::vector<std::string> columns = {"none",   "viscous",            "stribeck",     "spall",
+                                        "ripple", "current_gain_error", "hinge_offset", "inertia"};
     columns.push_back("error");
     std::map<std::string, std::map<std::string, int>> confusion;
     std::map<std::string, std::vector<double>> coef_err, ratio_i, ratio_t, ratio_tw;
@@ -156,6 +168,8 @@ int main(int argc, char** argv) {
     }
     std::printf("  stribeck amplitude x w_s: median relative error %.3f (max %.3f, n %zu)\n", median(area_err),
                 area_err.empty() ? NAN : *std::max_element(area_err.begin(), area_err.end()), area_err.size());
-    std::printf("false discoveries on clean runs: %d of %d\n", runs - confusion["none"]["none"], runs);
+    if (std::find(kinds.begin(), kinds.end(), "none") != kinds.end()) {
+        std::printf("false discoveries on clean runs: %d of %d\n", runs - confusion["none"]["none"], runs);
+    }
     return 0;
 }

@@ -168,6 +168,13 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
 
     const RunSignals base_sim = run_signals(resimulate(run, p));
     const std::vector<char> mask = comparison_mask(s, base_sim);
+    const auto compared = static_cast<std::size_t>(std::count(mask.begin(), mask.end(), char{1}));
+    if (compared < kMinScreenSamples) {
+        throw EmadiagError("discovery: the " + run.sequence + " run has " + std::to_string(compared) +
+                           " comparison samples (slipping in the run and the model); at least " +
+                           std::to_string(kMinScreenSamples) +
+                           " are needed (a BRK run barely moves: use a DYN or sweep run)");
+    }
     rep.model.error_before = model_error(s, base_sim, mask);
     rep.model.error_after = rep.model.error_before;
 

@@ -78,7 +78,9 @@ ScreenResult screen_effects(const RunSignals& s, const ScreenInput& in) {
         double best_drss = -1;
         bool best_sign_ok = false;
         double best_sxx = 0;
-        for (const auto& shape : shape_grid(kind, s)) {
+        const auto grid = shape_grid(kind, s);
+        const std::size_t grid_size = std::max<std::size_t>(1, grid.size());
+        for (const auto& shape : grid) {
             Eigen::VectorXd x = window_sums(signature(s, shape));
             const double sxx_raw = x.squaredNorm();
             x -= q * (q.transpose() * x);
@@ -102,7 +104,8 @@ ScreenResult screen_effects(const RunSignals& s, const ScreenInput& in) {
         const double dof = dn - static_cast<double>(p) - 1.0;
         best.amplitude_se = std::sqrt(rss1 / dof / best_sxx);
         best.rss_ratio = rss1 / rss0;
-        best.delta_bic = dn * std::log(rss0 / rss1) - (1.0 + scanned_parameters(kind)) * std::log(dn);
+        best.delta_bic = dn * std::log(rss0 / rss1) - (1.0 + scanned_parameters(kind)) * std::log(dn) -
+                         2.0 * std::log(static_cast<double>(grid_size));
         best.explained_rms_nm = std::sqrt(best_drss / weight_sum);
         {
             const auto full = signature(s, best.shape);

@@ -8,7 +8,9 @@
 // signatures of effects already in the model) plus ONE candidate signature x (candidate_effect.hpp,
 // computed from the measured signals: the first-order change of T_R the effect makes). With RSS_0
 // without and RSS_1 with x:
-//   delta_BIC = n ln(RSS_0 / RSS_1) - (1 + m) ln n          (Schwarz 1978; m = scanned shape parameters)
+//   delta_BIC = n ln(RSS_0 / RSS_1) - (1 + m) ln n - 2 ln G
+// (Schwarz 1978; m = scanned shape parameters; G = shapes scanned: the best of G fits is a maximum
+// of G likelihood ratios, and 2 ln G is the Bonferroni allowance for it in the same chi-square units)
 // with n the number of windows. A candidate is accepted when delta_BIC > kMinDeltaBic, its amplitude has the physical sign, and
 // the largest torque it makes on the compared samples, |a| max|x_k|, is at least kMinEffectPeakNm:
 // below that the effect does not matter for the actuator's health (it is 6 % of the datasheet FDJ).

@@ -115,14 +115,19 @@ INSTANTIATE_TEST_SUITE_P(Effects, DiscoverEffect, ::testing::ValuesIn(kCases),
 
 // With typical noise only a few samples see low speed: amplitude and w_s trade off along a valley,
 // and their product (the extra friction integrated over speed, / sqrt(pi)) is what the run
-// determines. Measured seeds 1 and 3: product error 4 % and 3 %; seed 2 finds nothing.
+// determines. 0.08 N m is at the detection limit (found in 5 of 10 bench runs of 0.03-0.1 N m);
+// 0.15 N m at 50 rad/s is found on seeds 1-4 with product errors 4.8, 23, 3.3 and 25 %.
 TEST(DiscoverStribeck, OnTypicalNoiseTheAmplitudeTimesSpeedIsDetermined) {
-    constexpr double kAmplitudeNm = 0.08, kSpeedRadS = 50.0, kProductTol = 0.25;
+    constexpr double kAmplitudeNm = 0.15, kSpeedRadS = 50.0, kProductTol = 0.30;
     const Effects fx = {{"stribeck_amplitude", kAmplitudeNm}, {"stribeck_speed", kSpeedRadS}};
-    const DiscoveryReport r = emadiag::discovery::discover(simulated_run(fx, emadiag::sim::NoiseProfile::Typical, 1));
-    ASSERT_THAT(r.added_effects(), ElementsAre("stribeck"));
-    const double product = r.term_value("stribeck_amplitude").value() * r.term_value("stribeck_speed").value();
-    EXPECT_TRUE(within("stribeck amplitude x speed", product, kAmplitudeNm * kSpeedRadS, kProductTol));
+    for (std::uint64_t seed : {1u, 2u, 3u, 4u}) {
+        const DiscoveryReport r = emadiag::discovery::discover(simulated_run(fx, emadiag::sim::NoiseProfile::Typical, seed));
+        ASSERT_THAT(r.added_effects(), ElementsAre("stribeck")) << "seed " << seed;
+        const double product = r.term_value("stribeck_amplitude").value() * r.term_value("stribeck_speed").value();
+        std::cout << "[ figures  ] stribeck noise typical seed " << seed << ": amplitude x speed " << product
+                  << " (truth " << kAmplitudeNm * kSpeedRadS << ")\n";
+        EXPECT_TRUE(within("stribeck amplitude x speed", product, kAmplitudeNm * kSpeedRadS, kProductTol)) << "seed " << seed;
+    }
 }
 
 TEST(DiscoverOtherEffects, HingeOffsetInertiaAndRippleOnNoiseFreeRuns) {
