@@ -36,7 +36,7 @@ void print_errors(std::ostream& os, const char* label, const discovery::ErrorMet
 void print_text(std::ostream& os, const std::string& path, const discovery::DiscoveryReport& r) {
     os << "run " << path << ": case " << r.load_case << ", sequence " << r.sequence << ", " << r.samples << " samples\n";
     os << "baseline model: " << discovery::kModelBase << " with\n";
-    for (const auto& h : r.model.health) {
+    for (const auto& h : r.baseline_health) {
         os << "  " << std::left << std::setw(7) << h.name << fmt(h.value, 6) << " (" << h.source;
         if (h.std_error > 0) os << ", se " << fmt(h.std_error, 3);
         os << ")\n";
@@ -44,13 +44,16 @@ void print_text(std::ostream& os, const std::string& path, const discovery::Disc
     int round = 0;
     for (const auto& s : r.steps) {
         os << "\nscreening " << ++round << ": " << s.screen.samples << " samples, residual " << fmt(s.screen.base_rms_nm)
-           << " N m RMS after the base columns\n";
-        for (const auto& c : s.screen.ranking) {
+           << " N m RMS (means of " << discovery::kScreenWindowSamples << ") after the base columns\n";
+        for (std::size_t i = 0; i < s.screen.ranking.size(); ++i) {
+            const auto& c = s.screen.ranking[i];
+            const std::string verdict = c.accepted ? (i == 0 && s.added ? "  ADDED" : "  passes (the best is added first)")
+                                                   : "  rejected: " + c.reason;
             const std::string shape = discovery::shape_text(c.shape);
             os << "  " << std::left << std::setw(19) << discovery::effect_name(c.shape.kind) << " dBIC " << std::setw(9)
                << fmt(c.delta_bic) << " peak " << std::setw(9) << fmt(c.peak_torque_nm) << " N m, explains " << std::setw(9) << fmt(c.explained_rms_nm) << " N m  a = "
                << fmt(c.amplitude) << " +/- " << fmt(c.amplitude_se, 2) << (shape.empty() ? "" : "  (" + shape + ")")
-               << (c.accepted ? "  ACCEPTED" : "  rejected: " + c.reason) << '\n';
+               << verdict << '\n';
         }
         if (s.added) {
             os << "  added " << discovery::effect_name(s.added->kind) << "; re-simulation fit (" << s.simulations
@@ -63,6 +66,20 @@ void print_text(std::ostream& os, const std::string& path, const discovery::Disc
     os << '\n' << (added.empty() ? "no missing effect found" : "added effects:");
     for (const auto& a : added) os << ' ' << a;
     os << '\n';
+    if (!added.empty()) {
+        os << "model: health refit with the added effects\n";
+        for (const auto& h : r.model.health) {
+            os << "  " << std::left << std::setw(7) << h.name << fmt(h.value, 6) << " (" << h.source;
+            if (h.std_error > 0) os << ", se " << fmt(h.std_error, 3);
+            os << ")\n";
+        }
+        for (const auto& t : r.model.terms) {
+            os << "  " << std::left << std::setw(22) << t.effect << fmt(t.value, 6);
+            if (t.std_error > 0) os << " (se " << fmt(t.std_error, 3) << ")";
+            os << '\n';
+        }
+    }
+    os << "error (measured - model):\n";
     print_errors(os, "before", r.model.error_before);
     print_errors(os, "after", r.model.error_after);
     const auto& b = r.model.error_before;

@@ -6,6 +6,7 @@
 #include "estimation/physics_estimator.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace emadiag::discovery {
 namespace {
@@ -83,6 +84,10 @@ nlohmann::json DiscoveryReport::to_json() const {
     j["version"] = kModelJsonVersion;
     j["run"] = {{"case", load_case}, {"sequence", sequence}, {"samples", samples}};
     j["added_effects"] = added_effects();
+    j["baseline_health"] = nlohmann::json::object();
+    for (const auto& h : baseline_health) {
+        j["baseline_health"][h.name] = {{"value", h.value}, {"std_error", h.std_error}, {"source", h.source}, {"note", h.note}};
+    }
     j["steps"] = nlohmann::json::array();
     for (const auto& s : steps) {
         nlohmann::json js;
@@ -100,7 +105,7 @@ nlohmann::json DiscoveryReport::to_json() const {
                                      {"explained_rms_Nm", c.explained_rms_nm},
                                      {"peak_torque_Nm", c.peak_torque_nm},
                                      {"rss_ratio", c.rss_ratio},
-                                     {"accepted", c.accepted},
+                                     {"passes_criterion", c.accepted},
                                      {"reason", c.reason}});
         }
         js["added"] = s.added ? nlohmann::json(effect_name(s.added->kind)) : nlohmann::json(nullptr);
@@ -167,6 +172,7 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
     }
 
     const RunSignals base_sim = run_signals(resimulate(run, p));
+    rep.baseline_health = health;
     const std::vector<char> mask = comparison_mask(s, base_sim);
     const auto compared = static_cast<std::size_t>(std::count(mask.begin(), mask.end(), char{1}));
     if (compared < kMinScreenSamples) {
@@ -210,7 +216,7 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
         std::vector<std::string> names = health_names;
         for (const auto& n : fitted_sim_effects(win.shape.kind)) names.push_back(n);
         // Ripple changes sign within a window of samples: it is fitted per sample.
-        const FitResult fit = fit_by_resimulation(run, s, start, names, mask,
+        const FitResult fit = fit_by_resimulation(run, s, start, names, mask, fsj_base_nm,
                                                   win.shape.kind == EffectKind::Ripple ? 1 : kFitWindowSamples);
         step.added = win.shape;
         step.fitted = fit.values;
@@ -235,7 +241,13 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
                 h->value = f.value;
                 h->std_error = f.std_error;
                 h->source = "refit";
-                find_health(health, kParamEtaA)->value = p.eta_a;
+                // eq. (4): se of eta_A from the slope d eta_A / d eta_O.
+                constexpr double kSlopeStep = 1e-6;
+                const double slope = (sim::eta_a_from_eta_o(p.eta_o + kSlopeStep, p.tau) -
+                                      sim::eta_a_from_eta_o(p.eta_o - kSlopeStep, p.tau)) / (2 * kSlopeStep);
+                auto* a = find_health(health, kParamEtaA);
+                a->value = p.eta_a;
+                a->std_error = std::abs(slope) * f.std_error;
             } else {
                 rep.model.terms.push_back({effect_field(f.name), f.value, f.std_error});
             }

@@ -41,7 +41,8 @@ struct DiscoveryStep {
 struct DiscoveryReport {
     std::string load_case, sequence;
     std::size_t samples = 0;
-    AugmentedModel model;
+    std::vector<HealthValue> baseline_health;  ///< step 1: estimated or datasheet
+    AugmentedModel model;                      ///< health refit with the added effects
     std::vector<DiscoveryStep> steps;
     std::vector<std::string> notes;
 

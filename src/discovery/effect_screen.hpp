@@ -47,7 +47,7 @@ struct CandidateEvidence {
     double rss_ratio = 1;            ///< RSS_1 / RSS_0
     double peak_torque_nm = 0;       ///< |amplitude| max |x_k| over the compared samples
     bool sign_ok = true;
-    bool accepted = false;
+    bool accepted = false;           ///< passes the criterion (the best one that passes is added)
     std::string reason;              ///< why it was or was not accepted
 };
 

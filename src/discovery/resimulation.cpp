@@ -151,7 +151,7 @@ ErrorMetrics model_error(const RunSignals& a, const RunSignals& b, const std::ve
 
 FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
                               const std::vector<std::string>& names, const std::vector<char>& mask,
-                              std::size_t window_samples) {
+                              double fsj_base_nm, std::size_t window_samples) {
     FitResult fr;
     // Rows: sums of the torque residual over windows of up to kFitWindowSamples consecutive masked
     // samples (the derivative noise of eq. 7 telescopes in a window sum).
@@ -165,8 +165,9 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
     }
     const auto m = static_cast<Eigen::Index>(windows.size());
     const auto np = static_cast<Eigen::Index>(names.size());
-    auto residual = [&](const sim::EmaParams& p) {
+    auto residual = [&](sim::EmaParams p) {
         ++fr.simulations;
+        p.fsj_nm = std::max(fsj_base_nm, p.fdj_nm);
         const RunSignals sim_s = run_signals(resimulate(run, p));
         Eigen::VectorXd e(m);
         for (Eigen::Index i = 0; i < m; ++i) {
@@ -227,6 +228,7 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
         if (!improved) break;
     }
     fr.params = p;
+    fr.params.fsj_nm = std::max(fsj_base_nm, p.fdj_nm);
     fr.cost_end = cost;
     // Standard errors from the last Jacobian: cov = s^2 (J^T J)^-1, s^2 = cost / (m - p).
     const Eigen::MatrixXd jtj = jac.transpose() * jac;

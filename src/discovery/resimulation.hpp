@@ -72,11 +72,12 @@ struct FitResult {
 /// Levenberg-Marquardt on the torque residual (measured T_R - re-simulated T_R over `mask`, summed
 /// over windows of kFitWindowSamples consecutive samples),
 /// varying the named parameters of `start` (finite-difference Jacobian on the real simulator).
-/// Parameters stay inside the simulator's allowed ranges; FSJ is kept >= FDJ.
+/// Parameters stay inside the simulator's allowed ranges; FSJ is max(fsj_base_nm, FDJ) at every
+/// trial point (the simulator needs FSJ >= FDJ; a DYN run does not identify FSJ).
 /// `window_samples` = 1 fits per sample (for a signature that changes within a window: ripple).
 [[nodiscard]] FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
                                             const std::vector<std::string>& names, const std::vector<char>& mask,
-                                            std::size_t window_samples = kFitWindowSamples);
+                                            double fsj_base_nm, std::size_t window_samples = kFitWindowSamples);
 
 /// Reads / writes one fittable parameter of EmaParams by name (eta_o also sets eta_a by eq. 4).
 [[nodiscard]] double get_parameter(const sim::EmaParams& p, const std::string& name);

@@ -66,6 +66,8 @@ TEST_F(DiscoverCli, TextNamesTheEffectAndTheErrorBeforeAndAfter) {
     const Result r = run("discover " + path("visc.csv"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_THAT(r.output, HasSubstr("added effects: viscous"));
+    EXPECT_THAT(r.output, HasSubstr("ADDED"));
+    EXPECT_THAT(r.output, HasSubstr("viscous_nm_s_rad"));
     EXPECT_THAT(r.output, HasSubstr("  before current"));
     EXPECT_THAT(r.output, HasSubstr("  after  current"));
     EXPECT_THAT(r.output, HasSubstr("ratio before/after: current"));
@@ -76,7 +78,7 @@ TEST_F(DiscoverCli, CleanRunFindsNothing) {
     const Result r = run("discover " + path("clean.csv"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_THAT(r.output, HasSubstr("no missing effect found"));
-    EXPECT_THAT(r.output, Not(HasSubstr("ACCEPTED")));
+    EXPECT_THAT(r.output, Not(HasSubstr("ADDED")));
 }
 
 TEST_F(DiscoverCli, JsonAndModelFilesAndSimulateReadsTheParams) {
