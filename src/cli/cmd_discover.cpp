@@ -47,14 +47,17 @@ void print_text(std::ostream& os, const std::string& path, const discovery::Disc
            << " N m RMS (means of " << discovery::kScreenWindowSamples << ") after the base columns\n";
         for (std::size_t i = 0; i < s.screen.ranking.size(); ++i) {
             const auto& c = s.screen.ranking[i];
-            const std::string verdict = c.accepted ? (i == 0 && s.added ? "  ADDED" : "  passes (the best is added first)")
-                                                   : "  rejected: " + c.reason;
+            std::string verdict = "  rejected: " + c.reason;
+            if (c.accepted && i == 0 && s.added) verdict = "  ADDED";
+            else if (c.accepted && i == 0 && !s.rejected_by_fit.empty()) verdict = "  passes; NOT confirmed by the fit";
+            else if (c.accepted) verdict = "  passes (the best is added first)";
             const std::string shape = discovery::shape_text(c.shape);
             os << "  " << std::left << std::setw(19) << discovery::effect_name(c.shape.kind) << " dBIC " << std::setw(9)
                << fmt(c.delta_bic) << " peak " << std::setw(9) << fmt(c.peak_torque_nm) << " N m, explains " << std::setw(9) << fmt(c.explained_rms_nm) << " N m  a = "
                << fmt(c.amplitude) << " +/- " << fmt(c.amplitude_se, 2) << (shape.empty() ? "" : "  (" + shape + ")")
                << verdict << '\n';
         }
+        if (!s.rejected_by_fit.empty()) os << "  " << s.rejected_by_fit << '\n';
         if (s.added) {
             os << "  added " << discovery::effect_name(s.added->kind) << "; re-simulation fit (" << s.simulations
                << " simulations):";

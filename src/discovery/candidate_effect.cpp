@@ -199,6 +199,14 @@ std::vector<std::pair<std::string, double>> sim_effects(const EffectShape& shape
     return {};
 }
 
+double signature_amplitude(EffectKind kind, double sim_value, double j_kgm2) {
+    switch (kind) {
+        case EffectKind::CurrentGain: return sim_value / (1.0 + sim_value);
+        case EffectKind::Inertia: return sim_value - j_kgm2;
+        default: return sim_value;
+    }
+}
+
 std::vector<std::string> fitted_sim_effects(EffectKind kind) {
     switch (kind) {
         case EffectKind::Viscous: return {"viscous"};

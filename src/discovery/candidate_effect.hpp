@@ -54,6 +54,8 @@ struct EffectShape {
 /// sim::Effects values (name used by Effects::set, value) of a hypothesis with amplitude a.
 [[nodiscard]] std::vector<std::pair<std::string, double>> sim_effects(const EffectShape& shape, double amplitude,
                                                                       double j_kgm2);
+/// The signature amplitude of a fitted sim::Effects amplitude value (inverse of sim_effects).
+[[nodiscard]] double signature_amplitude(EffectKind kind, double sim_value, double j_kgm2);
 /// The sim::Effects names a re-simulation fit varies for this kind (amplitude first, then the
 /// continuous shape parameters; ripple periods stay at the scanned integer).
 [[nodiscard]] std::vector<std::string> fitted_sim_effects(EffectKind kind);

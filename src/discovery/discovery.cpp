@@ -109,9 +109,11 @@ nlohmann::json DiscoveryReport::to_json() const {
                                      {"reason", c.reason}});
         }
         js["added"] = s.added ? nlohmann::json(effect_name(s.added->kind)) : nlohmann::json(nullptr);
+        if (!s.rejected_by_fit.empty()) js["rejected_by_fit"] = s.rejected_by_fit;
         js["fitted"] = nlohmann::json::array();
         for (const auto& f : s.fitted) js["fitted"].push_back({{"name", f.name}, {"value", f.value}, {"std_error", f.std_error}});
         js["simulations"] = s.simulations;
+        js["fit_delta_bic"] = s.fit_delta_bic;
         if (s.added) js["error_after"] = discovery::to_json(s.error_after);
         j["steps"].push_back(js);
     }
@@ -217,10 +219,42 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
         for (const auto& n : fitted_sim_effects(win.shape.kind)) names.push_back(n);
         // Ripple changes sign within a window of samples: it is fitted per sample.
         const FitResult fit = fit_by_resimulation(run, s, start, names, mask, fsj_base_nm,
-                                                  win.shape.kind == EffectKind::Ripple ? 1 : kFitWindowSamples);
-        step.added = win.shape;
+                                                  win.shape.kind == EffectKind::Ripple ? 1 : kFitWindowSamples, &p);
         step.fitted = fit.values;
         step.simulations = fit.simulations;
+        // The fit must confirm the screening with the same criterion on the re-simulated cost (the
+        // model without the effect against the fitted model): delta_BIC > kMinDeltaBic and a peak
+        // torque of at least kMinEffectPeakNm. Otherwise the effect is not added.
+        const FittedValue& amp = fit.values[health_names.size()];
+        const double rows = static_cast<double>(fit.rows);
+        const double grid = static_cast<double>(std::max<std::size_t>(1, shape_grid(win.shape.kind, s).size()));
+        const double fit_bic = rows * std::log(fit.cost_reference / fit.cost_end) -
+                               (1.0 + scanned_parameters(win.shape.kind)) * std::log(rows) - 2.0 * std::log(grid);
+        EffectShape fitted_shape = win.shape;
+        if (fitted_shape.kind == EffectKind::Stribeck) fitted_shape.shape1 = fit.params.effects.stribeck_speed_rad_s;
+        if (fitted_shape.kind == EffectKind::Spall) {
+            fitted_shape.shape1 = fit.params.effects.spall_center_deg;
+            fitted_shape.shape2 = fit.params.effects.spall_width_deg;
+        }
+        const double a = signature_amplitude(fitted_shape.kind, amp.value, p.j_kgm2);
+        double peak = 0;
+        {
+            const auto x = signature(s, fitted_shape);
+            for (std::size_t k = 0; k < x.size(); ++k) {
+                if (mask[k]) peak = std::max(peak, std::abs(x[k]));
+            }
+        }
+        step.fit_delta_bic = fit_bic;
+        if (!(fit_bic > kMinDeltaBic) || !(std::abs(a) * peak >= kMinEffectPeakNm)) {
+            step.rejected_by_fit = effect_name(win.shape.kind) + ": the re-simulation fit gives " + amp.name + " = " +
+                                   std::to_string(amp.value) + " +/- " + std::to_string(amp.std_error) +
+                                   ", delta BIC " + std::to_string(fit_bic) + ", peak torque " +
+                                   std::to_string(std::abs(a) * peak) + " N m; not confirmed";
+            rep.notes.push_back(step.rejected_by_fit);
+            rep.steps.push_back(std::move(step));
+            break;
+        }
+        step.added = win.shape;
         p = fit.params;
         // The accepted shape with the fitted continuous shape parameters, for the next screening.
         EffectShape shape = win.shape;
@@ -245,9 +279,9 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
                 constexpr double kSlopeStep = 1e-6;
                 const double slope = (sim::eta_a_from_eta_o(p.eta_o + kSlopeStep, p.tau) -
                                       sim::eta_a_from_eta_o(p.eta_o - kSlopeStep, p.tau)) / (2 * kSlopeStep);
-                auto* a = find_health(health, kParamEtaA);
-                a->value = p.eta_a;
-                a->std_error = std::abs(slope) * f.std_error;
+                auto* eta_a_value = find_health(health, kParamEtaA);
+                eta_a_value->value = p.eta_a;
+                eta_a_value->std_error = std::abs(slope) * f.std_error;
             } else {
                 rep.model.terms.push_back({effect_field(f.name), f.value, f.std_error});
             }

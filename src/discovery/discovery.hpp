@@ -7,7 +7,8 @@
 //   2. Screening of the candidate library (candidate_effect.hpp) on the model-consistent residual
 //      with the BIC and an effect-size floor (effect_screen.hpp).
 //   3. The winner's coefficients are fitted with FDJ (and eta_O) by re-simulation
-//      (resimulation.hpp); screening repeats with it in the base, up to max_effects.
+//      (resimulation.hpp); the fit must confirm it (the same BIC on the re-simulated cost, peak
+//      torque >= kMinEffectPeakNm); screening repeats with it in the base, up to max_effects.
 // Only the Run's samples, constants, case and sequence are read: never true_* / effect_* metadata.
 #include "core/run.hpp"
 #include "discovery/augmented_model.hpp"
@@ -34,6 +35,8 @@ struct DiscoveryStep {
     ScreenResult screen;
     std::optional<EffectShape> added;
     std::vector<FittedValue> fitted;  ///< values and standard errors of the re-simulation fit
+    std::string rejected_by_fit;      ///< why the winner was not added after its fit (empty if added)
+    double fit_delta_bic = 0;         ///< the criterion on the re-simulated cost, without vs with the effect
     int simulations = 0;
     ErrorMetrics error_after;
 };

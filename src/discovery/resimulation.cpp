@@ -151,7 +151,7 @@ ErrorMetrics model_error(const RunSignals& a, const RunSignals& b, const std::ve
 
 FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
                               const std::vector<std::string>& names, const std::vector<char>& mask,
-                              double fsj_base_nm, std::size_t window_samples) {
+                              double fsj_base_nm, std::size_t window_samples, const sim::EmaParams* reference) {
     FitResult fr;
     // Rows: sums of the torque residual over windows of up to kFitWindowSamples consecutive masked
     // samples (the derivative noise of eq. 7 telescopes in a window sum).
@@ -179,6 +179,8 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
         }
         return e;
     };
+    fr.rows = windows.size();
+    if (reference != nullptr) fr.cost_reference = residual(*reference).squaredNorm();
     sim::EmaParams p = start;
     Eigen::VectorXd e = residual(p);
     fr.cost_start = e.squaredNorm();

@@ -65,6 +65,8 @@ struct FitResult {
     sim::EmaParams params;
     std::vector<FittedValue> values;
     double cost_start = 0, cost_end = 0;  ///< sum of squared window sums of the torque residual
+    double cost_reference = 0;            ///< the same for `reference` (when given)
+    std::size_t rows = 0;                 ///< window sums in the cost
     int iterations = 0;
     int simulations = 0;
 };
@@ -77,7 +79,8 @@ struct FitResult {
 /// `window_samples` = 1 fits per sample (for a signature that changes within a window: ripple).
 [[nodiscard]] FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
                                             const std::vector<std::string>& names, const std::vector<char>& mask,
-                                            double fsj_base_nm, std::size_t window_samples = kFitWindowSamples);
+                                            double fsj_base_nm, std::size_t window_samples = kFitWindowSamples,
+                                            const sim::EmaParams* reference = nullptr);
 
 /// Reads / writes one fittable parameter of EmaParams by name (eta_o also sets eta_a by eq. 4).
 [[nodiscard]] double get_parameter(const sim::EmaParams& p, const std::string& name);
