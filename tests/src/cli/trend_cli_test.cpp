@@ -135,6 +135,19 @@ TEST_F(TrendCli, TheSameSeedGivesTheSameReport) {
     EXPECT_EQ(a.output, b.output);
 }
 
+TEST_F(TrendCli, HistorySimIsDeterministicForASeed) {
+    const std::string common = " --tail N7EM --sessions 3 --fdj-rate-per-100d 0.01 --seed 4";
+    const std::string a = (dir_ / "a.db").string(), b = (dir_ / "b.db").string(), c = (dir_ / "c.db").string();
+    ASSERT_EQ(run("history-sim --db " + a + common).exit_code, 0);
+    ASSERT_EQ(run("history-sim --db " + b + common).exit_code, 0);
+    ASSERT_EQ(run("history-sim --db " + c + common + "1").exit_code, 0);  // seed 41
+    const Result ra = run("trend --db " + a + " --tail N7EM --json", false), rb = run("trend --db " + b + " --tail N7EM --json", false),
+                 rc = run("trend --db " + c + " --tail N7EM --json", false);
+    ASSERT_EQ(ra.exit_code, 0) << ra.output;
+    EXPECT_EQ(ra.output, rb.output);
+    EXPECT_NE(ra.output, rc.output);
+}
+
 TEST_F(TrendCli, AnUnknownTailIsAnErrorListingTheKnownTails) {
     ASSERT_EQ(history_.exit_code, 0) << history_.output;
     const Result r = run("trend --db " + db() + " --tail N999ZZ");
