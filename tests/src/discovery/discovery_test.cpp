@@ -74,6 +74,8 @@ const EffectCase kCases[] = {
     {"current_gain_error", {{"current_gain_error", 0.04}}, "current_gain_error", 0.01, 0.03, 100.0, 5.0},
 };
 
+void PrintTo(const EffectCase& c, std::ostream* os) { *os << c.name; }
+
 class DiscoverEffect : public ::testing::TestWithParam<EffectCase> {};
 
 TEST_P(DiscoverEffect, NamesAndFitsTheEffectOnANoiseFreeRun) {
