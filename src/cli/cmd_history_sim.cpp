@@ -9,6 +9,7 @@
 // session. Runs have source "history-sim"; their meta_json carries the true parameters
 // (true_FDJ_Nm, true_FSJ_Nm, ...). Deterministic for a seed.
 #include "cli/command.hpp"
+#include "diagnosis/session_storage.hpp"
 
 #include "core/emadiag_error.hpp"
 #include "core/run_csv.hpp"
@@ -71,38 +72,6 @@ std::string num(double v, int digits = 4) {
     std::ostringstream os;
     os << std::setprecision(digits) << v;
     return os.str();
-}
-
-/// The stored form of a simulated run (after diagnosis/test_run.cpp's to_stored, which keeps the
-/// candump log; a simulated run's raw record is its run CSV).
-db::StoredRun to_stored(const Run& run, const std::string& tail, const std::string& started_utc, const std::optional<RunEstimates>& est) {
-    db::StoredRun s;
-    s.tail_number = tail;
-    s.actuator_serial = run.meta_value("ema_serial_number").value_or("");
-    s.started_utc = started_utc;
-    s.source = kHistorySimSource;
-    s.load_case = run.load_case;
-    s.sequence = run.sequence;
-    s.k_t_nm_per_a = run.constants.k_t_nm_per_a;
-    s.j_kgm2 = run.constants.j_kgm2;
-    s.tau = run.constants.tau;
-    s.sample_period_s = run.constants.sample_period_s;
-    s.valid = true;
-    s.status_note = "simulated";
-    nlohmann::json meta = nlohmann::json::object();
-    for (const auto& [k, v] : run.meta) meta[k] = v;
-    s.meta_json = meta.dump();
-    for (const auto& x : run.samples)
-        s.samples.push_back({x.t_s, x.current_a, x.speed_rad_s, x.theta_m_rad, x.hinge_moment_nm, x.command_deg});
-    std::ostringstream csv;
-    write_run_csv(csv, run);
-    s.raw_log_format = "csv";
-    s.raw_log = csv.str();
-    if (est) {
-        for (const auto& h : est->estimates)
-            for (const auto& p : h.parameters) s.estimates.push_back({h.estimator, p.name, p.value, p.std_error, p.identifiable, p.method, p.note});
-    }
-    return s;
 }
 
 void check(const HistorySimOptions& o) {
@@ -190,33 +159,22 @@ const bool registered = register_command(Command{
                             a.invalid_reason = std::string("not estimated: ") + e.what();
                         }
                     }
-                    s.runs.push_back(to_stored(run, o->tail, started_utc, a.estimates));
-                    if (!a.valid) {
-                        s.runs.back().valid = false;
-                        s.runs.back().status_note = a.invalid_reason;
-                    }
+                    db::StoredRun stored = to_stored_run(run, o->tail, started_utc, a.estimates);
+                    std::ostringstream csv;  // a simulated run's raw record is its run CSV
+                    write_run_csv(csv, run);
+                    stored.raw_log_format = "csv";
+                    stored.raw_log = csv.str();
+                    stored.valid = a.valid;
+                    stored.status_note = a.valid ? "simulated" : a.invalid_reason;
+                    s.runs.push_back(std::move(stored));
                     assessed.push_back(std::move(a));
                 }
                 const Assessment verdict = assess(assessed, limits);
-                s.verdict = to_string(verdict.verdict);
-                s.verdict_note = verdict.reason;
+                set_assessment(s, verdict);
                 std::string physics_fdj = "-";
-                for (const auto& f : verdict.findings) {
-                    db::StoredFinding d;
-                    d.parameter = f.parameter;
-                    d.estimator = f.estimator;
-                    d.value = f.value;
-                    d.std_error = f.std_error;
-                    if (f.limit) {
-                        d.limit_value = f.limit->limit;
-                        d.limit_kind = to_string(f.limit->kind);
-                    }
-                    d.status = to_string(f.status);
-                    d.note = f.note;
-                    s.findings.push_back(std::move(d));
+                for (const auto& f : verdict.findings)
                     if (f.parameter == kParamFdj && f.estimator == "physics:dyn" && f.value)
                         physics_fdj = num(*f.value, 5) + " +/- " + num(f.std_error.value_or(0), 2);
-                }
                 const std::int64_t id = db::store_test_session(database, s);
                 std::cout << "  session " << id << "  " << started_utc << "  true FDJ " << num(fdj_nm, 5) << " FSJ " << num(fsj_nm, 5)
                           << "  physics:dyn FDJ " << physics_fdj << "  " << s.verdict << '\n';

@@ -1,12 +1,12 @@
 #include "diagnosis/test_run.hpp"
 
+#include "diagnosis/session_storage.hpp"
+
 #include "core/emadiag_error.hpp"
 #include "core/run_csv.hpp"
 #include "core/run_summary.hpp"
 #include "emadiag/db/run_store.hpp"
 #include "emadiag/db/test_session_store.hpp"
-
-#include <nlohmann/json.hpp>
 
 #include <ctime>
 #include <fstream>
@@ -43,32 +43,13 @@ std::string read_bytes(const std::string& path) {
 }
 
 db::StoredRun to_stored(const TestRunRecord& r, const std::string& tail, const std::string& started_utc) {
-    const Run& run = r.outcome.run;
-    db::StoredRun s;
-    s.tail_number = tail;
-    s.actuator_serial = run.meta_value("ema_serial_number").value_or("");
-    s.started_utc = started_utc;
-    s.source = run.meta_value("source").value_or("emadiag test-run") + " " + run.meta_value("bus").value_or("");
-    s.load_case = run.load_case;
+    db::StoredRun s = to_stored_run(r.outcome.run, tail, started_utc, r.estimates);
+    s.source = r.outcome.run.meta_value("source").value_or("emadiag test-run") + " " + r.outcome.run.meta_value("bus").value_or("");
     s.sequence = r.sequence;
-    s.k_t_nm_per_a = run.constants.k_t_nm_per_a;
-    s.j_kgm2 = run.constants.j_kgm2;
-    s.tau = run.constants.tau;
-    s.sample_period_s = run.constants.sample_period_s;
     s.valid = r.outcome.valid;
     s.status_note = r.outcome.valid ? r.outcome.status : r.outcome.status + ": " + r.outcome.invalid_reason;
-    nlohmann::json meta = nlohmann::json::object();
-    for (const auto& [k, v] : run.meta) meta[k] = v;
-    s.meta_json = meta.dump();
-    for (const auto& x : run.samples)
-        s.samples.push_back({x.t_s, x.current_a, x.speed_rad_s, x.theta_m_rad, x.hinge_moment_nm, x.command_deg});
     s.raw_log_format = "candump";
     s.raw_log = read_bytes(r.log_path);
-    if (r.estimates) {
-        for (const auto& h : r.estimates->estimates)
-            for (const auto& p : h.parameters)
-                s.estimates.push_back({h.estimator, p.name, p.value, p.std_error, p.identifiable, p.method, p.note});
-    }
     return s;
 }
 
@@ -183,24 +164,9 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
     s.phase = options.phase;
     s.started_utc = result.started_utc;
     s.tool_version = options.tool_version;
-    s.verdict = to_string(result.assessment.verdict);
-    s.verdict_note = result.assessment.reason;
     s.limits_json = options.limits.to_json().dump();
     for (const auto& r : result.runs) s.runs.push_back(to_stored(r, options.tail_number, result.started_utc));
-    for (const auto& f : result.assessment.findings) {
-        db::StoredFinding d;
-        d.parameter = f.parameter;
-        d.estimator = f.estimator;
-        d.value = f.value;
-        d.std_error = f.std_error;
-        if (f.limit) {
-            d.limit_value = f.limit->limit;
-            d.limit_kind = to_string(f.limit->kind);
-        }
-        d.status = to_string(f.status);
-        d.note = f.note;
-        s.findings.push_back(std::move(d));
-    }
+    set_assessment(s, result.assessment);
     result.db_session_id = db::store_test_session(database, s);
     say("stored as test session " + std::to_string(result.db_session_id) + " of " + options.tail_number + " in " + options.db_path);
     if (failure) throw EmadiagError(*failure + " (the " + std::to_string(result.runs.size()) + " run(s) before it are stored as test session " +
