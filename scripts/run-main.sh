@@ -12,3 +12,16 @@ echo "== emadiag test-run: the technician's test run on the ramp, against the si
 echo "   (scripts/vcan/with_vcan.sh boots user-mode Linux when this kernel has no vcan)"
 rm -rf out/test-run
 scripts/vcan/with_vcan.sh out/test-run/uml scripts/test-run-demo.sh "$PWD/build" "$PWD/out/test-run"
+echo
+echo "== emadiag trend: a reliability engineer's report for one tail number =="
+echo "   (12 monthly pre-flight sessions of a transmission whose friction rises; true FDJ crosses its"
+echo "    0.096 N m limit at day 400, 70 days after the last session; FSJ crosses 0.144 N m at day 1200)"
+rm -rf out/trend && mkdir -p out/trend
+./build/src/emadiag history-sim --db out/trend/maintenance.db --tail N456EM --sessions 12 --days-between 30 \
+    --fdj-rate-per-100d 0.004 --fsj-rate-per-100d 0.002 --seed 3
+./build/src/emadiag trend --db out/trend/maintenance.db --tail N456EM
+echo
+echo "== emadiag discover: closing the loop on a run with an effect the model was never told about =="
+echo "   (case B DYN, typical noise, viscous friction 2e-5 N m s/rad that the datasheet model lacks)"
+./build/src/emadiag simulate --case B --sequence dyn --noise typical --seed 4 --effect viscous=2e-5 --out out/viscous_dyn_B.csv
+./build/src/emadiag discover out/viscous_dyn_B.csv --out-model out/viscous_dyn_B.model.json
