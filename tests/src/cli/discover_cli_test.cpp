@@ -1,5 +1,6 @@
 // `emadiag discover` end to end: the binary on run CSVs written by `emadiag simulate` (text,
 // --json, --out-model, --out-params read back by `simulate --params`) and its clear errors.
+#include "support/cli_runner.hpp"
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -18,29 +19,8 @@ namespace {
 using ::testing::HasSubstr;
 using ::testing::Not;
 
-#ifdef EMADIAG_CLI
-const std::string kExe = EMADIAG_CLI;
-#else
-const std::string kExe = std::string(EMADIAG_BINARY_DIR) + "/src/emadiag";
-#endif
-
-struct Result {
-    int exit_code = -1;
-    std::string output;  // stdout and stderr
-};
-
-Result run(const std::string& args) {
-    Result r;
-    const std::string cmd = kExe + " " + args + " 2>&1";
-    FILE* p = popen(cmd.c_str(), "r");
-    if (!p) return r;
-    std::array<char, 4096> buf{};
-    std::size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
-    const int status = pclose(p);
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return r;
-}
+using Result = emadiag::test::CliResult;
+Result run(const std::string& args) { return emadiag::test::run_cli(args); }
 
 class DiscoverCli : public ::testing::Test {
 protected:

@@ -2,6 +2,7 @@
 // drifting at a known rate (ground routine per session: DYN then BRK, case A, typical noise), the
 // trend report's slope and RUL interval against the truth, the stored truth, the text report and the
 // errors (docs/trend-report.md).
+#include "support/cli_runner.hpp"
 #include "emadiag/db/database.hpp"
 #include "emadiag/db/run_store.hpp"
 
@@ -22,12 +23,6 @@ namespace {
 using ::testing::AllOf;
 using ::testing::HasSubstr;
 
-#ifdef EMADIAG_CLI
-const std::string kExe = EMADIAG_CLI;
-#else
-const std::string kExe = std::string(EMADIAG_BINARY_DIR) + "/src/emadiag";
-#endif
-
 /// The history: 8 sessions 30 days apart, FDJ 0.08 N m rising 0.004 N m per 100 days. The limit
 /// (section 8 envelope) 0.096 N m is reached at day (0.096 - 0.08) / 0.004 * 100 = 400, the last
 /// session is at day 210: true RUL 190 days.
@@ -41,23 +36,8 @@ constexpr double kTrueCrossingDays = (kFdjLimitNm - kFdjStartNm) / kFdjRateNmPer
 constexpr double kTrueRulDays = kTrueCrossingDays - (kSessions - 1) * kDaysBetween;
 constexpr double kTruthTolerance = 1e-12;
 
-struct Result {
-    int exit_code = -1;
-    std::string output;  // stdout and stderr
-};
-
-Result run(const std::string& args, bool merge_stderr = true) {
-    Result r;
-    const std::string cmd = kExe + " " + args + (merge_stderr ? " 2>&1" : " 2>/dev/null");
-    FILE* p = popen(cmd.c_str(), "r");
-    if (!p) return r;
-    std::array<char, 4096> buf{};
-    std::size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
-    const int status = pclose(p);
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return r;
-}
+using Result = emadiag::test::CliResult;
+Result run(const std::string& args, bool merge_stderr = true) { return emadiag::test::run_cli(args, merge_stderr); }
 
 class TrendCli : public ::testing::Test {
 protected:
