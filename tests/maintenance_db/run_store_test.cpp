@@ -2,6 +2,7 @@
 // stores, migrations, and misuse.
 #include "emadiag/db/db_error.hpp"
 #include "emadiag/db/run_store.hpp"
+#include "support/stored_run_example.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -15,25 +16,7 @@ namespace {
 using ::testing::HasSubstr;
 using ::testing::ThrowsMessage;
 
-StoredRun example_run(const std::string& tail = "F-WEMA") {
-    StoredRun r;
-    r.tail_number = tail;
-    r.actuator_serial = "SN-0042";
-    r.started_utc = "2026-11-22T20:00:00Z";
-    r.source = "test";
-    r.load_case = "A";
-    r.sequence = "dyn";
-    r.k_t_nm_per_a = 0.2;
-    r.j_kgm2 = 1.65e-4;
-    r.tau = 800;
-    r.sample_period_s = 5e-4;
-    for (int i = 0; i < 10; ++i) r.samples.push_back({5e-4 * (i + 1), 0.1 * i, -3.0 * i, 0.01 * i, 5.0, -0.1 * i});
-    r.raw_log_format = "candump";
-    r.raw_log = std::string("(1.000000) vcan0 123#00\n\0binary-safe", 32);
-    r.estimates.push_back({"physics", "FDJ_Nm", 0.081, 0.0004, true, "physics-wrls", ""});
-    r.estimates.push_back({"physics", "eta_O", std::nullopt, 0.0, false, "physics-wrls", "not identifiable: constant load"});
-    return r;
-}
+StoredRun example_run(const std::string& tail = "F-WEMA") { return test::example_stored_run("dyn", tail); }
 
 TEST(RunStore, StoreThenLoadGivesBackEverything) {
     Database db(":memory:");

@@ -4,6 +4,7 @@
 #include "emadiag/db/db_error.hpp"
 #include "emadiag/db/run_store.hpp"
 #include "emadiag/db/test_session_store.hpp"
+#include "support/stored_run_example.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -35,25 +36,7 @@ constexpr int kNewestSchemaVersion = 2;  // schema/002_test_sessions.sql
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-StoredRun example_run(const std::string& sequence, const std::string& tail = "F-WEMA") {
-    StoredRun r;
-    r.tail_number = tail;
-    r.actuator_serial = "SN-0042";
-    r.started_utc = "2026-11-22T20:00:00Z";
-    r.source = "test-run socketcan:vcan0";
-    r.load_case = "A";
-    r.sequence = sequence;
-    r.k_t_nm_per_a = 0.2;
-    r.j_kgm2 = 1.65e-4;
-    r.tau = 800;
-    r.sample_period_s = 5e-4;
-    for (int i = 0; i < 10; ++i) r.samples.push_back({5e-4 * (i + 1), 0.1 * i, -3.0 * i, 0.01 * i, 5.0, -0.1 * i});
-    r.raw_log_format = "candump";
-    r.raw_log = std::string("(1.000000) vcan0 123#00\n") + '\0' + "binary-safe " + sequence;
-    r.estimates.push_back({"physics", "FDJ_Nm", 0.081, 0.0004, true, "physics-wrls", ""});
-    r.estimates.push_back({"physics", "eta_O", std::nullopt, 0.0, false, "physics-wrls", "not identifiable: constant load"});
-    return r;
-}
+StoredRun example_run(const std::string& sequence, const std::string& tail = "F-WEMA") { return test::example_stored_run(sequence, tail); }
 
 /// A post-flight session with two runs and four findings, some without value, error or limit.
 /// The findings are deliberately not in the order (parameter, estimator) they load back in.
