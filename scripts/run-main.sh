@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
 # README command (a): set up, build, and run the main job.
+# EMADIAG_MAIN_QUICK=1 runs the same steps with smaller counts (CI runs it that way).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
@@ -11,13 +12,18 @@ echo
 echo "== emadiag test-run: the technician's test run on the ramp, against the simulated EMA on vcan0 =="
 echo "   (scripts/vcan/with_vcan.sh boots user-mode Linux when this kernel has no vcan)"
 rm -rf out/test-run
-scripts/vcan/with_vcan.sh out/test-run/uml scripts/test-run-demo.sh "$PWD/build" "$PWD/out/test-run"
+if ! scripts/vcan/with_vcan.sh out/test-run/uml scripts/test-run-demo.sh "$PWD/build" "$PWD/out/test-run"; then
+    echo "run-main: the technician's test run did not end SERVICEABLE (see its output above); the main job stops here" >&2
+    exit 1
+fi
 echo
 echo "== emadiag trend: a reliability engineer's report for one tail number =="
-echo "   (12 monthly pre-flight sessions of a transmission whose friction rises; true FDJ crosses its"
+SESSIONS=12
+[ "${EMADIAG_MAIN_QUICK:-0}" = 1 ] && SESSIONS=6
+echo "   ($SESSIONS monthly pre-flight sessions of a transmission whose friction rises; true FDJ crosses its"
 echo "    0.096 N m limit at day 400, 70 days after the last session; FSJ crosses 0.144 N m at day 1200)"
 rm -rf out/trend && mkdir -p out/trend
-./build/src/emadiag history-sim --db out/trend/maintenance.db --tail N456EM --sessions 12 --days-between 30 \
+./build/src/emadiag history-sim --db out/trend/maintenance.db --tail N456EM --sessions "$SESSIONS" --days-between 30 \
     --fdj-rate-per-100d 0.004 --fsj-rate-per-100d 0.002 --seed 3
 ./build/src/emadiag trend --db out/trend/maintenance.db --tail N456EM
 echo

@@ -16,6 +16,9 @@ if [ -x scripts/vcan/run_vcan_tests.sh ]; then
   scripts/vcan/run_vcan_tests.sh "$PWD/build"
 fi
 
+echo "== the main job (README command (a)), quick counts =="
+EMADIAG_MAIN_QUICK=1 scripts/run-main.sh
+
 echo "== AddressSanitizer + UBSan build =="
 scripts/build.sh asan
 echo "== unit tests (ASan + UBSan) =="

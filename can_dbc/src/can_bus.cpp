@@ -27,6 +27,31 @@ std::string to_string(ReceiveStatus s) {
     return "?";
 }
 
+BatchSendResult CanBus::send_batch(const std::vector<CanFrame>& frames) {
+    BatchSendResult r;
+    for (const auto& f : frames) {
+        r.status = send(f);
+        if (r.status != SendStatus::Sent) return r;
+        ++r.sent;
+    }
+    return r;
+}
+
+std::size_t CanBus::receive_batch(std::vector<ReceiveResult>& out, std::size_t max_results, std::chrono::microseconds timeout) {
+    std::size_t n = 0;
+    auto wait = timeout;
+    while (n < max_results) {
+        ReceiveResult r = receive(wait);
+        if (r.status == ReceiveStatus::Timeout) break;
+        const bool last = r.status != ReceiveStatus::Frame;
+        out.push_back(std::move(r));
+        ++n;
+        if (last) break;
+        wait = std::chrono::microseconds{0};
+    }
+    return n;
+}
+
 std::unique_ptr<CanBus> open_bus(const std::string& spec) {
     const auto colon = spec.find(':');
     const std::string kind = spec.substr(0, colon);

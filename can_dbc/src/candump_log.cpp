@@ -172,18 +172,36 @@ std::vector<CandumpRecord> read_candump_file(const std::string& path) {
     return out;
 }
 
-CandumpWriter::CandumpWriter(const std::string& path) : path_(path), out_(path, std::ios::trunc) {
+CandumpWriter::CandumpWriter(const std::string& path, CandumpWriterBounds bounds)
+    : path_(path), bounds_(bounds), out_(path, std::ios::trunc | std::ios::binary), last_flush_(std::chrono::steady_clock::now()) {
     if (!out_) throw CanError(path + ": cannot create the candump log");
+    buffer_.reserve(bounds_.max_buffered_bytes + 128);
+}
+
+CandumpWriter::~CandumpWriter() {
+    // Every exit path keeps the log: unwinding after an error included. A destructor never throws.
+    try {
+        flush();
+    } catch (...) {
+    }
 }
 
 void CandumpWriter::write(const CanFrame& frame, const std::string& iface) {
-    out_ << format_candump_line(frame, iface) << '\n';
+    buffer_ += format_candump_line(frame, iface);
+    buffer_ += '\n';
     ++lines_;
+    if (buffer_.size() >= bounds_.max_buffered_bytes || std::chrono::steady_clock::now() - last_flush_ >= bounds_.max_buffered_time)
+        flush();
 }
 
 void CandumpWriter::flush() {
+    last_flush_ = std::chrono::steady_clock::now();
+    if (!buffer_.empty()) {
+        out_.write(buffer_.data(), static_cast<std::streamsize>(buffer_.size()));
+        buffer_.clear();
+    }
     out_.flush();
-    if (!out_) throw CanError(path_ + ": write failed");
+    if (!out_) throw CanError(path_ + ": write failed (" + std::to_string(lines_) + " lines logged so far)");
 }
 
 }  // namespace emadiag::can

@@ -34,7 +34,8 @@ std::optional<std::string> tail_number_problem(const std::string& tail_number) {
 
 void check_run(const StoredRun& run, const std::string& context) {
     if (const auto problem = tail_number_problem(run.tail_number)) throw DbError(context + *problem);
-    if (run.samples.empty()) throw DbError(context + "run for " + run.tail_number + " has no samples");
+    // An invalid run may hold no sample (aborted before its telemetry): its raw log is its record.
+    if (run.samples.empty() && run.valid) throw DbError(context + "valid run for " + run.tail_number + " has no samples");
     if (run.raw_log.empty()) {
         throw DbError(context + "run for " + run.tail_number + " has no raw log; the raw log is kept with every run");
     }

@@ -72,6 +72,9 @@ timeout "${EMADIAG_UML_TIMEOUT_S:-600}" "$UML" mem="${EMADIAG_UML_MEM:-512M}" ro
     init="$INIT" con=null con0=fd:0,fd:1 </dev/null >"$WORK/uml-console.log" 2>&1
 UML_RC=$?
 cat "$WORK/guest-setup.log" 2>/dev/null
+if [ "$UML_RC" -eq 124 ]; then
+    echo "with_vcan: stopped: user-mode Linux did not finish within ${EMADIAG_UML_TIMEOUT_S:-600} s (EMADIAG_UML_TIMEOUT_S) running: $*" >&2
+fi
 if [ ! -f "$WORK/command.status" ]; then
     echo "with_vcan: the guest wrote no status (linux.uml exit $UML_RC); console:" >&2
     tail -n 40 "$WORK/uml-console.log" >&2

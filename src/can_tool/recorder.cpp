@@ -2,6 +2,8 @@
 
 #include "core/emadiag_error.hpp"
 
+#include <ctime>
+
 namespace emadiag::can_tool {
 
 using can::icd::Command;
@@ -10,29 +12,71 @@ namespace {
 constexpr std::chrono::milliseconds kAbortWait{300};
 constexpr std::chrono::milliseconds kLeaveWait{200};
 constexpr std::chrono::milliseconds kMaxReceiveWait{5};
+/// Frames taken from the bus per receive call (one recvmmsg on SocketCAN).
+constexpr std::size_t kReceiveBatch = 64;
+/// A heartbeat older than this is written to the log even when no later frame has come to order
+/// it against (the EMA may be silent).
+constexpr std::chrono::milliseconds kHeartbeatLogHold{100};
 
 bool is_ema_frame(const can::CanFrame& f) {
     return !f.extended && (f.id == can::icd::kStatusId || f.id == can::icd::kCommandAckId || f.id == can::icd::kIdentId ||
                            f.id == can::icd::kTelemetryAId || f.id == can::icd::kTelemetryBId);
 }
+
+/// A tool's frame that this recorder did not send (the bus never returns a socket's own frames).
+bool is_tool_frame(const can::CanFrame& f) {
+    return !f.extended && !f.error && (f.id == can::icd::kToolCommandId || f.id == can::icd::kToolHeartbeatId);
+}
+
+std::chrono::nanoseconds unix_now() {
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch());
+}
+
+double process_cpu_s() {
+    timespec ts{};
+    ::clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
 }  // namespace
 
 Recorder::Recorder(can::CanBus& bus, RecorderOptions options)
-    : bus_(bus), options_(std::move(options)), writer_(options_.log_path) {}
+    : bus_(bus),
+      options_(std::move(options)),
+      writer_(options_.log_path),
+      own_heartbeat_(options_.shared_heartbeat ? nullptr : std::make_unique<HeartbeatSender>(bus_)),
+      heartbeat_(options_.shared_heartbeat ? *options_.shared_heartbeat : *own_heartbeat_) {}
+
+void Recorder::fail(const std::string& message) {
+    if (own_heartbeat_) own_heartbeat_->stop();
+    log_heartbeats(std::nullopt);
+    writer_.flush();
+    throw EmadiagError(message);
+}
 
 void Recorder::log(const can::CanFrame& f) {
     writer_.write(f, bus_.interface_name());
     decoder_.feed(f);
 }
 
+void Recorder::log_heartbeats(std::optional<std::chrono::nanoseconds> upto) {
+    heartbeat_.take_sent(heartbeats_pending_);
+    std::size_t n = 0;
+    while (n < heartbeats_pending_.size() && (!upto || heartbeats_pending_[n].timestamp <= *upto)) log(heartbeats_pending_[n++]);
+    heartbeats_pending_.erase(heartbeats_pending_.begin(), heartbeats_pending_.begin() + static_cast<std::ptrdiff_t>(n));
+}
+
+void Recorder::check_heartbeat() const {
+    if (auto why = heartbeat_.failure())
+        throw EmadiagError("cannot send TOOL_Heartbeat (0x011) on " + bus_.spec() + ": " + *why);
+}
+
 void Recorder::transmit(const can::CanFrame& frame) {
     can::CanFrame f = frame;
-    f.timestamp = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch());
+    f.timestamp = unix_now();
     const can::SendStatus s = bus_.send(f);
-    if (s != can::SendStatus::Sent) {
-        writer_.flush();
-        throw EmadiagError("cannot send " + can::format_id(f.id, f.extended) + " on " + bus_.spec() + ": " + can::to_string(s));
-    }
+    if (s != can::SendStatus::Sent) fail("cannot send " + can::format_id(f.id, f.extended) + " on " + bus_.spec() + ": " + can::to_string(s));
+    log_heartbeats(f.timestamp);
     log(f);
 }
 
@@ -42,30 +86,39 @@ bool Recorder::pump(Clock::time_point deadline, const std::function<bool()>& don
         auto now = Clock::now();
         if (now >= deadline) return false;
         if (interrupt && interrupt->load()) return false;
-        if (options_.send_heartbeat && now >= next_heartbeat_) {
-            transmit(decoder_.icd.encode_heartbeat(heartbeat_counter_++));
-            next_heartbeat_ += can::icd::kHeartbeatPeriod;
-            if (next_heartbeat_ < now) next_heartbeat_ = now + can::icd::kHeartbeatPeriod;
+        if (heartbeat_.failure()) {
+            log_heartbeats(std::nullopt);
+            writer_.flush();
+            check_heartbeat();
         }
-        const auto until = std::min({deadline, next_heartbeat_, now + kMaxReceiveWait});
-        const auto wait = std::chrono::duration_cast<std::chrono::microseconds>(until - now);
-        can::ReceiveResult r = bus_.receive(std::max(wait, std::chrono::microseconds{0}));
-        if (r.status == can::ReceiveStatus::Frame) {
-            log(r.frame);
-            if (is_ema_frame(r.frame)) {
-                ++ema_frames_;
-                last_ema_frame_ = Clock::now();
+        const auto wait = std::chrono::duration_cast<std::chrono::microseconds>(std::min(deadline, now + kMaxReceiveWait) - now);
+        batch_.clear();
+        (void)bus_.receive_batch(batch_, kReceiveBatch, std::max(wait, std::chrono::microseconds{0}));
+        if (!batch_.empty()) ++loop_.receive_calls;
+        for (auto& r : batch_) {
+            ++loop_.frames_received;
+            // The heartbeats this tool sent before the frame arrived go into the log before it.
+            if (r.frame.timestamp.count() > 0) log_heartbeats(r.frame.timestamp);
+            if (r.status == can::ReceiveStatus::Frame) {
+                log(r.frame);
+                if (is_ema_frame(r.frame)) {
+                    ++ema_frames_;
+                    last_ema_frame_ = Clock::now();
+                } else if (is_tool_frame(r.frame) && !other_tool_) {
+                    other_tool_ = (r.frame.id == can::icd::kToolCommandId ? "TOOL_Command (0x010)" : "TOOL_Heartbeat (0x011)") +
+                                  std::string(" from another tool");
+                }
+                if (auto a = decoder_.icd.decode_ack(r.frame)) last_ack_ = a;
+            } else if (r.status == can::ReceiveStatus::ErrorFrame) {
+                log(r.frame);
+            } else if (r.status == can::ReceiveStatus::BusOff) {
+                if (r.frame.error) log(r.frame);
+                fail(bus_.spec() + ": bus-off: " + r.detail);
+            } else if (r.status == can::ReceiveStatus::EndOfLog) {
+                fail(bus_.spec() + ": the replayed log ended while waiting");
             }
-            if (auto a = decoder_.icd.decode_ack(r.frame)) last_ack_ = a;
-        } else if (r.status == can::ReceiveStatus::ErrorFrame) {
-            log(r.frame);
-        } else if (r.status == can::ReceiveStatus::BusOff) {
-            writer_.flush();
-            throw EmadiagError(bus_.spec() + ": bus-off: " + r.detail);
-        } else if (r.status == can::ReceiveStatus::EndOfLog) {
-            writer_.flush();
-            throw EmadiagError(bus_.spec() + ": the replayed log ended while waiting");
         }
+        log_heartbeats(unix_now() - std::chrono::duration_cast<std::chrono::nanoseconds>(kHeartbeatLogHold));
     }
 }
 
@@ -76,7 +129,8 @@ std::string Recorder::no_answer(const std::string& awaited, const std::string& a
 
 RecordOutcome Recorder::record(const std::atomic<bool>& interrupt) {
     const can::EmaIcd& icd = decoder_.icd;
-    next_heartbeat_ = Clock::now();
+    const auto wall_start = Clock::now();
+    const double cpu_start = process_cpu_s();
     auto send_command = [&](Command c) {
         can::ToolCommand tc{c, can::icd::TestSequence::None, 0};
         if (c == Command::StartSequence) tc = can::ToolCommand{c, options_.sequence, options_.session_id};
@@ -84,10 +138,17 @@ RecordOutcome Recorder::record(const std::atomic<bool>& interrupt) {
         transmit(icd.encode_command(tc));
     };
     auto acked = [&](Command c) { return [this, c] { return last_ack_ && last_ack_->command == c; }; };
-    auto fail = [&](const std::string& message) -> void {
-        writer_.flush();
-        throw EmadiagError(message);
-    };
+    // 0. Nobody else may be commanding this EMA: listen before the first command. Heartbeats a
+    // shared sender sent before this sequence belong to no sequence's log.
+    {
+        std::vector<can::CanFrame> before;
+        heartbeat_.take_sent(before);
+    }
+    (void)pump(Clock::now() + options_.listen_before_command, [&] { return other_tool_.has_value(); });
+    if (other_tool_)
+        fail("another tool is active on " + bus_.spec() + ": heard " + *other_tool_ +
+             " before sending anything; nothing was commanded. Disconnect the other tool, then run again");
+    if (options_.send_heartbeat) heartbeat_.start();
 
     // 1. Identification (the constants of the Run).
     send_command(Command::RequestIdent);
@@ -135,9 +196,20 @@ RecordOutcome Recorder::record(const std::atomic<bool>& interrupt) {
         return s && s->session_id == options_.session_id &&
                (s->state == can::icd::SequenceState::Done || s->state == can::icd::SequenceState::Aborted);
     };
+    auto finished_or_conflict = [&] { return finished() || other_tool_.has_value(); };
+    bool transient = false;
     for (;;) {
         const auto silence_deadline = last_ema_frame_ + options_.silence_timeout;
-        if (pump(std::min(seq_deadline, silence_deadline), finished, &interrupt)) break;
+        if (pump(std::min(seq_deadline, silence_deadline), finished_or_conflict, &interrupt)) {
+            if (!finished()) {
+                // Another tool commands the same EMA: its commands and ours cannot both be obeyed.
+                status = "incomplete";
+                problem = "another tool commanded on " + bus_.spec() + " during the sequence (" + *other_tool_ + "); ABORT sent";
+                send_command(Command::Abort);
+                (void)pump(Clock::now() + kAbortWait, finished);
+            }
+            break;
+        }
         if (interrupt.load()) {
             status = "aborted";
             send_command(Command::Abort);
@@ -153,6 +225,7 @@ RecordOutcome Recorder::record(const std::atomic<bool>& interrupt) {
             status = "incomplete";
             problem = "the EMA on " + bus_.spec() + " went silent: no frame for " + std::to_string(options_.silence_timeout.count()) +
                       " ms during the sequence";
+            transient = true;
             break;
         }
     }
@@ -161,6 +234,8 @@ RecordOutcome Recorder::record(const std::atomic<bool>& interrupt) {
     // 5. Leave ground test (best effort: the EMA may be gone).
     send_command(Command::LeaveGroundTest);
     (void)pump(Clock::now() + kLeaveWait, acked(Command::LeaveGroundTest));
+    if (own_heartbeat_) own_heartbeat_->stop();
+    log_heartbeats(std::nullopt);
     writer_.flush();
 
     RecordOutcome out;
@@ -178,6 +253,16 @@ RecordOutcome Recorder::record(const std::atomic<bool>& interrupt) {
     out.valid = out.run.meta_value("valid").value_or("false") == "true";
     out.invalid_reason = out.run.meta_value("invalid_reason").value_or("");
     out.log_lines = writer_.lines();
+    loop_.heartbeat = heartbeat_.stats();
+    loop_.wall_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
+    loop_.cpu_s = process_cpu_s() - cpu_start;
+    out.loop = loop_;
+    // Lost or corrupted frames, the EMA's watchdog and a silent EMA pass; a refusal, a fault of
+    // the actuator, Ctrl-C or another tool do not.
+    const auto& last = decoder_.last_status();
+    const bool watchdog = last && last->fault == can::icd::FaultCode::HeartbeatLost;
+    out.transient_loss = !out.valid && status != "aborted" && !other_tool_ &&
+                         (transient || watchdog || out.stats.frames_lost > 0 || out.stats.crc_failures > 0);
     return out;
 }
 

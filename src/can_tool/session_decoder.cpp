@@ -47,12 +47,16 @@ void SessionDecoder::feed(const can::CanFrame& f) {
                 // A corrupt frame's index and counter cannot be trusted: count it, use nothing from it.
                 return;
             }
+            auto& halves = is_a ? a_ : b_;
+            if (index >= halves.size()) halves.resize(std::min<std::size_t>(kMaxSamples, index + 1u));
+            if (halves[index].present) {
+                // A retransmission repeats index and counter: counted, the first copy kept.
+                ++duplicates_;
+                return;
+            }
             int& last = is_a ? last_counter_a_ : last_counter_b_;
             if (last >= 0) counter_gaps_ += static_cast<std::uint64_t>((counter - last - 1 + 16) % 16);
             last = counter;
-            auto& halves = is_a ? a_ : b_;
-            if (index >= halves.size()) halves.resize(std::min<std::size_t>(kMaxSamples, index + 1u));
-            if (halves[index].present) ++duplicates_;
             halves[index] = h;
             return;
         }
@@ -150,6 +154,7 @@ Run SessionDecoder::build_run(const std::string& source) const {
     run.set_meta("frames_lost", std::to_string(st.frames_lost));
     run.set_meta("crc_failures", std::to_string(st.crc_failures));
     run.set_meta("counter_gaps", std::to_string(st.counter_gaps));
+    run.set_meta("duplicates", std::to_string(st.duplicates));
     run.set_meta("loss_fraction", format_exact(loss));
     run.set_meta("valid", invalid.empty() ? "true" : "false");
     if (!invalid.empty()) run.set_meta("invalid_reason", invalid);

@@ -5,6 +5,7 @@
 #include "emadiag/can/can_bus.hpp"
 #include "emadiag/node/ema_node.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cerrno>
@@ -14,6 +15,7 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 namespace emadiag::cli {
 namespace {
@@ -32,8 +34,22 @@ struct EmaSimOptions {
     std::uint64_t fault_seed = 1;
     std::uint32_t serial = 1001;
     std::uint64_t exit_after = 0;
+    std::optional<double> idle_exit_s;
+    std::uint32_t drop_burst = 0;
+    double drop_burst_at = 0.5;
+    double duplicate_fraction = 0.0;
+    double reorder_fraction = 0.0;
+    std::uint32_t fault_sequences = 0;
     int realtime_priority = 0;
 };
+
+/// With --exit-after and no --idle-exit, the node still gives up on a tool silent for this long.
+constexpr double kDefaultIdleExitS = 30.0;
+/// With an idle exit, how long the node waits for the first tool frame (a tool may take seconds to
+/// start on a slow machine: it opens and migrates the database before it sends anything).
+constexpr double kFirstToolWaitS = 60.0;
+/// Keep answering this long after the last sequence, so the tool sees the final status and its LEAVE ack.
+constexpr std::chrono::milliseconds kExitGrace{300};
 
 const bool registered = register_command(Command{
     "ema-sim", "Run the simulated EMA node on a CAN bus (ICD can_dbc/ema.dbc)",
@@ -60,8 +76,26 @@ const bool registered = register_command(Command{
                        "control loop would; needs CAP_SYS_NICE")
             ->capture_default_str()
             ->check(CLI::Range(0, 99));
-        sub.add_option("--exit-after", o->exit_after, "Exit after this many sequences have ended (0 = run until Ctrl-C)")
+        sub.add_option("--drop-burst", o->drop_burst, "Fault: drop this many consecutive telemetry frames once per sequence")
             ->capture_default_str();
+        sub.add_option("--drop-burst-at", o->drop_burst_at, "Fault: where the burst starts, as a fraction of the sequence")
+            ->capture_default_str()
+            ->check(CLI::Range(0.0, 1.0));
+        sub.add_option("--duplicate-fraction", o->duplicate_fraction, "Fault: fraction of telemetry frames sent twice")
+            ->capture_default_str()
+            ->check(CLI::Range(0.0, 1.0));
+        sub.add_option("--reorder-fraction", o->reorder_fraction, "Fault: fraction of telemetry frames sent after the next one")
+            ->capture_default_str()
+            ->check(CLI::Range(0.0, 1.0));
+        sub.add_option("--fault-sequences", o->fault_sequences,
+                       "Faults act on the first this-many sequences only (0 = all): a transient disturbance")
+            ->capture_default_str();
+        sub.add_option("--exit-after", o->exit_after, "Exit after this many sequences have ended, done or aborted (0 = run until Ctrl-C)")
+            ->capture_default_str();
+        sub.add_option("--idle-exit", o->idle_exit_s,
+                       "Exit when no tool has sent anything for this many seconds since its last frame (or for 60 s, or "
+                       "this if longer, from start when no tool came); default 30 with --exit-after, else never")
+            ->check(CLI::PositiveNumber);
         return [so, o] {
             node::EmaNodeConfig cfg;
             cfg.sim = config_from(*so);
@@ -75,6 +109,13 @@ const bool registered = register_command(Command{
             cfg.faults.silent_after_fraction = o->silent_after;
             cfg.faults.ack_without_ground_test = o->ack_without_ground_test;
             cfg.faults.seed = o->fault_seed;
+            cfg.faults.drop_burst_frames = o->drop_burst;
+            cfg.faults.drop_burst_at_fraction = o->drop_burst_at;
+            cfg.faults.duplicate_fraction = o->duplicate_fraction;
+            cfg.faults.reorder_fraction = o->reorder_fraction;
+            cfg.faults.fault_sequences = o->fault_sequences;
+            // 0: never exit for idleness.
+            const double idle_exit_s = o->idle_exit_s ? *o->idle_exit_s : o->exit_after > 0 ? kDefaultIdleExitS : 0.0;
             auto bus = can::open_bus(o->bus);
             node::EmaNode ema(*bus, cfg);
             const auto t0 = std::chrono::steady_clock::now();
@@ -98,22 +139,41 @@ const bool registered = register_command(Command{
             std::printf("ema-sim on %s: case %s, noise %s, seed %llu, time scale %g\n", o->bus.c_str(), so->load_case.c_str(),
                         so->noise.c_str(), static_cast<unsigned long long>(so->seed), o->time_scale);
             std::fflush(stdout);
+            std::string why_exit = "stopped by a signal";
             while (!g_stop.load()) {
                 ema.poll(std::chrono::milliseconds(2));
                 const auto& st = ema.stats();
                 if (o->exit_after > 0 && st.sequences_done + st.sequences_aborted >= o->exit_after) {
-                    // Keep answering a moment so the tool sees the final status and its LEAVE ack.
-                    const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(300);
+                    why_exit = std::to_string(st.sequences_done + st.sequences_aborted) + " sequence(s) ended (--exit-after)";
+                    const auto until = std::chrono::steady_clock::now() + kExitGrace;
                     while (std::chrono::steady_clock::now() < until && !g_stop.load()) ema.poll(std::chrono::milliseconds(2));
                     break;
                 }
+                if (idle_exit_s > 0) {
+                    const auto idle = ema.tool_idle().value_or(std::chrono::steady_clock::now() - t0);
+                    const double limit_s = ema.tool_idle() ? idle_exit_s : std::max(idle_exit_s, kFirstToolWaitS);
+                    if (std::chrono::duration<double>(idle).count() > limit_s) {
+                        std::ostringstream w;
+                        w << (ema.tool_idle() ? "no tool frame" : "no tool heard") << " for " << limit_s << " s (--idle-exit)";
+                        why_exit = w.str();
+                        break;
+                    }
+                }
             }
+            std::printf("ema-sim: exiting: %s\n", why_exit.c_str());
+            const auto gaps = ema.heartbeat_gaps();
+            std::printf("ema-sim: heartbeat gaps seen in GROUND_TEST: %zu, p50 %.1f ms, p99 %.1f ms, max %.1f ms (watchdog %lld ms)\n",
+                        gaps.count, gaps.p50_ms, gaps.p99_ms, gaps.max_ms,
+                        static_cast<long long>(can::icd::kHeartbeatTimeout.count()));
             const auto& st = ema.stats();
-            std::printf("ema-sim: %llu sequences started, %llu done, %llu aborted; %llu telemetry frames sent, %llu dropped, %llu CRC corrupted\n",
+            std::printf("ema-sim: %llu sequences started, %llu done, %llu aborted; %llu telemetry frames sent, %llu dropped, %llu CRC corrupted, "
+                        "%llu duplicated, %llu reordered; %llu transmit calls\n",
                         static_cast<unsigned long long>(st.sequences_started), static_cast<unsigned long long>(st.sequences_done),
                         static_cast<unsigned long long>(st.sequences_aborted), static_cast<unsigned long long>(st.telemetry_frames_sent),
                         static_cast<unsigned long long>(st.telemetry_frames_dropped),
-                        static_cast<unsigned long long>(st.telemetry_crc_corrupted));
+                        static_cast<unsigned long long>(st.telemetry_crc_corrupted),
+                        static_cast<unsigned long long>(st.telemetry_frames_duplicated),
+                        static_cast<unsigned long long>(st.telemetry_frames_reordered), static_cast<unsigned long long>(st.send_calls));
             return 0;
         };
     }});

@@ -94,6 +94,9 @@ const bool registered = register_command(Command{
                       << "tail " << t.tail_number << ", EMA serial " << (r.actuator_serial.empty() ? "?" : r.actuator_serial)
                       << ", test session " << r.db_session_id << " in " << t.db_path << " (" << r.started_utc << ")\n";
             if (r.interrupted) return kExitInterrupted;
+            if (r.assessment.verdict == Verdict::NoTest)
+                std::cerr << "emadiag: test-run: NO_TEST: the EMA was not assessed (" << r.assessment.reason
+                          << "); raw logs in " << t.out_dir.string() << ", session stored; run the test again\n";
             switch (r.assessment.verdict) {
                 case Verdict::Serviceable: return 0;
                 case Verdict::Unserviceable: return kExitUnserviceable;

@@ -2,6 +2,8 @@
 
 #include "diagnosis/session_storage.hpp"
 
+#include "can_tool/candump_run.hpp"
+
 #include "core/emadiag_error.hpp"
 #include "core/run_csv.hpp"
 #include "core/run_summary.hpp"
@@ -32,6 +34,12 @@ std::string compact(const std::string& iso) {
     return s;
 }
 
+/// An EmadiagError's text without its "[emadiag] " prefix, to be wrapped in another.
+std::string without_prefix(const std::string& what) {
+    const std::string prefix = "[emadiag] ";
+    return what.rfind(prefix, 0) == 0 ? what.substr(prefix.size()) : what;
+}
+
 std::string sequence_name(can::icd::TestSequence s) { return s == can::icd::TestSequence::Brk ? "brk" : "dyn"; }
 
 std::string read_bytes(const std::string& path) {
@@ -45,15 +53,58 @@ std::string read_bytes(const std::string& path) {
 db::StoredRun to_stored(const TestRunRecord& r, const std::string& tail, const std::string& started_utc) {
     db::StoredRun s = to_stored_run(r.outcome.run, tail, started_utc, r.estimates);
     s.source = r.outcome.run.meta_value("source").value_or("emadiag test-run") + " " + r.outcome.run.meta_value("bus").value_or("");
-    s.sequence = r.sequence;
     s.valid = r.outcome.valid;
     s.status_note = r.outcome.valid ? r.outcome.status : r.outcome.status + ": " + r.outcome.invalid_reason;
+    if (r.attempt > 1) s.status_note += " (attempt " + std::to_string(r.attempt) + ")";
     s.raw_log_format = "candump";
     s.raw_log = read_bytes(r.log_path);
     return s;
 }
 
 }  // namespace
+
+namespace session_parts {
+
+void estimate(TestRunRecord& rec) {
+    try {
+        rec.estimates = estimate_run(rec.outcome.run);
+    } catch (const EmadiagError& e) {
+        rec.estimate_error = e.what();
+    }
+}
+
+Assessment assess_records(const std::vector<TestRunRecord>& runs, const HealthLimits& limits) {
+    std::vector<AssessedRun> assessed;
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+        const auto& r = runs[i];
+        // An attempt followed by a retry of the same sequence is superseded by it.
+        if (i + 1 < runs.size() && runs[i + 1].sequence == r.sequence) continue;
+        AssessedRun a;
+        a.sequence = r.sequence;
+        a.valid = r.outcome.valid && r.estimate_error.empty();
+        a.invalid_reason = !r.outcome.valid ? r.outcome.status + (r.outcome.invalid_reason.empty() ? "" : ": " + r.outcome.invalid_reason)
+                                            : "not estimated: " + r.estimate_error;
+        a.estimates = r.estimates;
+        assessed.push_back(std::move(a));
+    }
+    return assess(assessed, limits);
+}
+
+db::StoredTestSession to_stored_session(const SessionManifest& header, const std::vector<TestRunRecord>& runs, const Assessment& assessment) {
+    db::StoredTestSession s;
+    s.tail_number = header.tail_number;
+    for (const auto& r : runs)
+        if (s.actuator_serial.empty()) s.actuator_serial = r.outcome.run.meta_value("ema_serial_number").value_or("");
+    s.phase = header.phase;
+    s.started_utc = header.started_utc;
+    s.tool_version = header.tool_version;
+    s.limits_json = header.limits_json;
+    for (const auto& r : runs) s.runs.push_back(to_stored(r, header.tail_number, header.started_utc));
+    set_assessment(s, assessment);
+    return s;
+}
+
+}  // namespace session_parts
 
 can::icd::TestSequence parse_test_sequence(const std::string& name) {
     if (name == "dyn") return can::icd::TestSequence::Dyn;
@@ -74,102 +125,151 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
                 throw EmadiagError("test sequence " + sequence_name(options.sequences[i]) + " is listed twice");
     db::check_tail_number(options.tail_number);
     // Open (create, migrate) the database before anything moves: a test must never end unstorable.
-    db::Database database(options.db_path);
+    std::optional<db::Database> database(std::in_place, options.db_path);
     std::error_code ec;
     std::filesystem::create_directories(options.out_dir, ec);
     if (ec) throw EmadiagError(options.out_dir.string() + ": cannot create the output directory: " + ec.message());
 
     TestRunResult result;
+    // A session an earlier run could not store (killed mid-run, database locked) goes in first.
+    database.reset();
+    result.recovered = recover_spooled_sessions(options.db_path, say);
+    database.emplace(options.db_path);
+
     result.started_utc = utc_now_iso8601();
+    SessionManifest manifest;
+    manifest.tail_number = options.tail_number;
+    manifest.phase = options.phase;
+    manifest.started_utc = result.started_utc;
+    manifest.tool_version = options.tool_version;
+    manifest.limits_json = options.limits.to_json().dump();
+    for (const auto seq : options.sequences) manifest.sequences.push_back(sequence_name(seq));
+    SessionSpool spool(spool_dir_for(options.db_path), manifest);
+
     const std::string stem_prefix = options.tail_number + "_" + compact(result.started_utc) + "_" + options.phase + "_";
     std::uint16_t session_id = options.first_session_id;
     std::optional<std::string> failure;
+    std::string failed_sequence;
+    // One heartbeat for the whole routine: it keeps going between sequences and while a run is
+    // estimated, so the EMA never sees a tool that went quiet and no other tool finds the bus free.
+    can_tool::HeartbeatSender heartbeat(bus);
     for (const auto seq : options.sequences) {
-        TestRunRecord rec;
-        rec.sequence = sequence_name(seq);
-        const std::filesystem::path stem = options.out_dir / (stem_prefix + rec.sequence);
-        rec.log_path = stem.string() + ".log";
-        rec.csv_path = stem.string() + ".csv";
-        can_tool::RecorderOptions ro;
-        ro.sequence = seq;
-        ro.session_id = session_id++;
-        ro.log_path = rec.log_path;
-        ro.answer_timeout = options.answer_timeout;
-        say("running " + rec.sequence + " (session " + std::to_string(ro.session_id) + ") on " + bus.spec());
-        can_tool::Recorder recorder(bus, ro);
-        try {
-            rec.outcome = recorder.record(interrupt);
-        } catch (const EmadiagError& e) {
-            // No answer, a refusal, no GROUND_TEST: the runs already recorded are stored before
-            // the error goes to the technician.
-            failure = e.what();
-            break;
-        }
-        rec.outcome.run.set_meta("tail_number", options.tail_number);
-        rec.outcome.run.set_meta("phase", options.phase);
-        write_run_csv_file(rec.csv_path, rec.outcome.run);
-        const auto& st = rec.outcome.stats;
-        say("  " + rec.sequence + ": " + rec.outcome.status + ", " + std::to_string(st.samples_complete) + " of " +
-            std::to_string(st.samples_expected) + " samples, " + std::to_string(st.frames_lost) + " frames lost; raw log " + rec.log_path);
-        if (result.actuator_serial.empty()) result.actuator_serial = rec.outcome.run.meta_value("ema_serial_number").value_or("");
-        if (rec.outcome.valid) {
-            // What the signals say before any estimate: the residual torque T_R of eq. 7 while
-            // moving fast, and the current and travel the sequence took.
-            const RunSummary sum = summarise(rec.outcome.run);
-            std::ostringstream line;
-            line.precision(4);
-            line << "  " << rec.sequence << ": peak current " << sum.peak_current_a << " A, surface " << sum.min_surface_deg << " .. "
-                 << sum.max_surface_deg << " deg";
-            if (sum.tr_plateau_down_nm && sum.tr_plateau_up_nm)
-                line << ", T_R (eq. 7) " << *sum.tr_plateau_down_nm << " N m moving down, " << *sum.tr_plateau_up_nm << " N m moving up";
-            say(line.str());
+        bool stop = false;
+        for (int attempt = 1; attempt <= 2; ++attempt) {
+            TestRunRecord rec;
+            rec.sequence = sequence_name(seq);
+            rec.attempt = attempt;
+            const std::filesystem::path stem =
+                options.out_dir / (stem_prefix + rec.sequence + (attempt > 1 ? "_attempt" + std::to_string(attempt) : std::string()));
+            rec.log_path = stem.string() + ".log";
+            rec.csv_path = stem.string() + ".csv";
+            can_tool::RecorderOptions ro;
+            ro.sequence = seq;
+            ro.session_id = session_id++;
+            ro.log_path = rec.log_path;
+            ro.answer_timeout = options.answer_timeout;
+            ro.shared_heartbeat = &heartbeat;
+            spool.add_log(SpooledLog{rec.sequence, attempt, rec.log_path});
+            say("running " + rec.sequence + (attempt > 1 ? " again" : "") + " (session " + std::to_string(ro.session_id) + ") on " +
+                bus.spec());
             try {
-                rec.estimates = estimate_run(rec.outcome.run);
+                can_tool::Recorder recorder(bus, ro);
+                rec.outcome = recorder.record(interrupt);
             } catch (const EmadiagError& e) {
-                rec.estimate_error = e.what();
-                say("  " + rec.sequence + ": not estimated: " + rec.estimate_error);
+                // No answer, a refusal, no GROUND_TEST, bus-off, another tool: the runs already
+                // recorded are stored before the error goes to the technician, and so is this
+                // sequence's partial log when it holds a run (the EMA identified itself and the
+                // sequence started).
+                failure = without_prefix(e.what());
+                failed_sequence = rec.sequence;
+                stop = true;
+                try {
+                    rec.outcome.run = read_run_candump(rec.log_path);
+                    rec.outcome.run.set_meta("tail_number", options.tail_number);
+                    rec.outcome.run.set_meta("phase", options.phase);
+                    rec.outcome.run.set_meta("valid", "false");
+                    rec.outcome.run.set_meta("invalid_reason", *failure);
+                    rec.outcome.status = "incomplete";
+                    rec.outcome.valid = false;
+                    rec.outcome.invalid_reason = *failure;
+                    result.runs.push_back(std::move(rec));
+                } catch (const std::exception&) {
+                    // Nothing was started: the log on disk is all there is, and the error names it.
+                }
+                break;
             }
+            rec.outcome.run.set_meta("tail_number", options.tail_number);
+            rec.outcome.run.set_meta("phase", options.phase);
+            write_run_csv_file(rec.csv_path, rec.outcome.run);
+            const auto& st = rec.outcome.stats;
+            const auto& lp = rec.outcome.loop;
+            std::ostringstream bus_line;
+            bus_line.precision(3);
+            bus_line << "  " << rec.sequence << ": bus " << lp.frames_received << " frames in " << lp.wall_s << " s ("
+                     << (lp.wall_s > 0 ? static_cast<double>(lp.frames_received) / lp.wall_s : 0.0) << " frames/s, "
+                     << lp.receive_calls << " receive calls), tool CPU "
+                     << (lp.frames_received > 0 ? 1e6 * lp.cpu_s / static_cast<double>(lp.frames_received) : 0.0)
+                     << " us/frame; heartbeat " << lp.heartbeat.sent << " sent, longest gap "
+                     << static_cast<double>(lp.heartbeat.max_gap.count()) / 1000.0 << " ms"
+                     << (lp.heartbeat.realtime ? " (SCHED_FIFO)" : " (normal priority)");
+            say("  " + rec.sequence + ": " + rec.outcome.status + ", " + std::to_string(st.samples_complete) + " of " +
+                std::to_string(st.samples_expected) + " samples, " + std::to_string(st.frames_lost) + " frames lost, " +
+                std::to_string(st.crc_failures) + " CRC failures, " + std::to_string(st.duplicates) + " duplicates; raw log " + rec.log_path);
+            say(bus_line.str());
+            if (result.actuator_serial.empty()) result.actuator_serial = rec.outcome.run.meta_value("ema_serial_number").value_or("");
+            if (rec.outcome.valid) {
+                // What the signals say before any estimate: the residual torque T_R of eq. 7 while
+                // moving fast, and the current and travel the sequence took.
+                const RunSummary sum = summarise(rec.outcome.run);
+                std::ostringstream line;
+                line.precision(4);
+                line << "  " << rec.sequence << ": peak current " << sum.peak_current_a << " A, surface " << sum.min_surface_deg << " .. "
+                     << sum.max_surface_deg << " deg";
+                if (sum.tr_plateau_down_nm && sum.tr_plateau_up_nm)
+                    line << ", T_R (eq. 7) " << *sum.tr_plateau_down_nm << " N m moving down, " << *sum.tr_plateau_up_nm << " N m moving up";
+                say(line.str());
+                session_parts::estimate(rec);
+                if (!rec.estimate_error.empty()) say("  " + rec.sequence + ": not estimated: " + rec.estimate_error);
+            }
+            const bool retry = !rec.outcome.valid && rec.outcome.transient_loss && attempt == 1 && options.retry_transient && !interrupt.load();
+            if (retry)
+                say("  " + rec.sequence + ": invalid after a transient loss (" + rec.outcome.invalid_reason + "); running " + rec.sequence +
+                    " once more");
+            stop = interrupt.load() || (!rec.outcome.valid && !retry);
+            result.runs.push_back(std::move(rec));
+            if (!retry) break;
         }
-        const bool stop = interrupt.load() || !rec.outcome.valid;
-        result.runs.push_back(std::move(rec));
         if (stop) break;  // an aborted or invalid run ends the session: nothing more is commanded
     }
+    heartbeat.stop();
     result.interrupted = interrupt.load();
 
-    std::vector<AssessedRun> assessed;
-    for (const auto& r : result.runs) {
-        AssessedRun a;
-        a.sequence = r.sequence;
-        a.valid = r.outcome.valid && r.estimate_error.empty();
-        a.invalid_reason = !r.outcome.valid ? r.outcome.status + (r.outcome.invalid_reason.empty() ? "" : ": " + r.outcome.invalid_reason)
-                                            : "not estimated: " + r.estimate_error;
-        a.estimates = r.estimates;
-        assessed.push_back(std::move(a));
-    }
     if (failure) {
-        result.assessment.findings = assess(assessed, options.limits).findings;
+        result.assessment.findings = session_parts::assess_records(result.runs, options.limits).findings;
         result.assessment.verdict = Verdict::NoTest;
-        result.assessment.reason = "the " + sequence_name(options.sequences[result.runs.size()]) + " sequence could not be run: " + *failure;
-        if (result.runs.empty()) throw EmadiagError(*failure);  // nothing to store
+        result.assessment.reason = "the " + failed_sequence + " sequence could not be run: " + *failure;
+        if (result.runs.empty()) {
+            spool.remove();  // nothing was recorded: nothing to store
+            throw EmadiagError(*failure);
+        }
     } else if (result.interrupted) {
         result.assessment.verdict = Verdict::NoTest;
         result.assessment.reason = "interrupted by the technician (Ctrl-C); the EMA was sent ABORT";
     } else {
-        result.assessment = assess(assessed, options.limits);  // the loop stops early only at an invalid run: NO_TEST
+        result.assessment = session_parts::assess_records(result.runs, options.limits);  // stops early only at an invalid run: NO_TEST
     }
+    spool.set_state("recorded");
 
-    db::StoredTestSession s;
-    s.tail_number = options.tail_number;
-    s.actuator_serial = result.actuator_serial;
-    s.phase = options.phase;
-    s.started_utc = result.started_utc;
-    s.tool_version = options.tool_version;
-    s.limits_json = options.limits.to_json().dump();
-    for (const auto& r : result.runs) s.runs.push_back(to_stored(r, options.tail_number, result.started_utc));
-    set_assessment(s, result.assessment);
-    result.db_session_id = db::store_test_session(database, s);
+    const db::StoredTestSession s = session_parts::to_stored_session(spool.manifest(), result.runs, result.assessment);
+    try {
+        result.db_session_id = db::store_test_session(*database, s);
+    } catch (const std::exception& e) {
+        throw EmadiagError(std::string(e.what()) + "; nothing was stored: the session stays spooled in " + spool.path().string() +
+                           " and `emadiag recover --db " + options.db_path + "` (or the next test-run) stores it");
+    }
+    spool.remove();
     say("stored as test session " + std::to_string(result.db_session_id) + " of " + options.tail_number + " in " + options.db_path);
-    if (failure) throw EmadiagError(*failure + " (the " + std::to_string(result.runs.size()) + " run(s) before it are stored as test session " +
+    if (failure) throw EmadiagError(*failure + " (the " + std::to_string(result.runs.size()) + " run(s) recorded are stored as test session " +
                                     std::to_string(result.db_session_id) + ", verdict NO_TEST)");
     return result;
 }

@@ -9,10 +9,16 @@
 //   3. Each valid run is checked and estimated by both methods (physics, network).
 //   4. The verdict (diagnosis/verdict.hpp) is formed against the limits.
 //   5. Session, runs (samples, raw logs, estimates) and findings go into SQLite in one transaction.
+// A run lost to something passing (dropped or corrupted frames, the EMA's heartbeat watchdog, a
+// silent EMA) is run once more on its own, and the technician is told; both attempts are stored.
 // An aborted or invalid run ends the session as NO_TEST; its logs are stored all the same.
+// The session is spooled beside the database (diagnosis/session_spool.hpp) until it is stored.
 #include "can_tool/recorder.hpp"
+#include "diagnosis/session_spool.hpp"
 #include "diagnosis/health_limits.hpp"
 #include "diagnosis/verdict.hpp"
+
+#include "emadiag/db/test_session_store.hpp"
 
 #include "emadiag/can/can_bus.hpp"
 
@@ -42,12 +48,15 @@ struct TestRunOptions {
     std::uint16_t first_session_id = 1;  ///< START_SEQUENCE session ids: this, this + 1, ...
     std::chrono::milliseconds answer_timeout{500};
     std::string tool_version;
+    /// Run a sequence once more when a transient loss invalidated it.
+    bool retry_transient = true;
     /// Progress lines for the technician (libraries never print; the CLI passes them to stdout).
     std::function<void(const std::string&)> on_progress;
 };
 
 struct TestRunRecord {
     std::string sequence;
+    int attempt = 1;
     can_tool::RecordOutcome outcome;
     std::string log_path, csv_path;
     std::optional<RunEstimates> estimates;
@@ -61,12 +70,24 @@ struct TestRunResult {
     std::vector<TestRunRecord> runs;
     Assessment assessment;
     bool interrupted = false;
+    std::vector<RecoveredSession> recovered;  ///< earlier spooled sessions stored first
 };
 
 /// Runs the session. Throws EmadiagError (after keeping the logs written so far on disk) when the
 /// EMA does not answer, refuses ground test or does not confirm it; DbError for a bad tail number
 /// or an unusable database, before the surface moves.
 [[nodiscard]] TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const std::atomic<bool>& interrupt);
+
+/// The parts of a session's storage shared by the live test run and the spool recovery.
+namespace session_parts {
+/// Estimates a valid run (both methods); an estimation error goes to `estimate_error`.
+void estimate(TestRunRecord& record);
+/// The verdict from the last attempt of each sequence.
+[[nodiscard]] Assessment assess_records(const std::vector<TestRunRecord>& runs, const HealthLimits& limits);
+/// The stored session: every attempt's run with its raw log read back from `log_path`.
+[[nodiscard]] db::StoredTestSession to_stored_session(const SessionManifest& header, const std::vector<TestRunRecord>& runs,
+                                                      const Assessment& assessment);
+}  // namespace session_parts
 
 /// "dyn" or "brk"; throws EmadiagError on another name.
 [[nodiscard]] can::icd::TestSequence parse_test_sequence(const std::string& name);

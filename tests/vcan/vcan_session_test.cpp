@@ -147,8 +147,33 @@ public:
         return std::make_unique<Process>(args, path(stem + ".out"));
     }
 
+    /// emadiag test-run against `db` with its logs in `logs`; `extra` appended.
+    std::unique_ptr<Process> start_test_run(const std::string& name, const std::string& db, const std::string& logs,
+                                            std::vector<std::string> extra = {}) {
+        std::vector<std::string> args{EMADIAG_CLI, "test-run", "--bus", bus_spec(), "--tail", "N123EM", "--db", path(db), "--out-dir",
+                                      path(logs)};
+        args.insert(args.end(), extra.begin(), extra.end());
+        return std::make_unique<Process>(args, path(name + ".out"));
+    }
+    /// The simulated EMA with an idle exit instead of a sequence count (a retry adds sequences).
+    std::unique_ptr<Process> start_ema_idle(std::vector<std::string> extra, const std::string& name = "ema") {
+        std::vector<std::string> args{EMADIAG_CLI, "ema-sim", "--bus", bus_spec(), "--time-scale", time_scale(), "--idle-exit", "3"};
+        args.insert(args.end(), extra.begin(), extra.end());
+        auto p = std::make_unique<Process>(args, path(name + ".out"));
+        EXPECT_TRUE(p->wait_output("ema-sim on", std::chrono::seconds(10))) << p->err();
+        return p;
+    }
+
     std::string dir_;
 };
+
+/// The stored sessions of N123EM in `db`.
+std::vector<db::StoredTestSession> sessions_in(const std::string& db_path) {
+    db::Database database(db_path);
+    std::vector<db::StoredTestSession> out;
+    for (const auto& s : db::list_test_sessions(database, "N123EM")) out.push_back(db::load_test_session(database, s.session_id));
+    return out;
+}
 
 
 void check_session(Vcan& t, const std::string& seq, sim::Sequence sseq, const std::string& stem, const std::string& noise) {
@@ -255,15 +280,25 @@ TEST_F(Vcan, HeartbeatStopsThenEmaAbortsWithin100ms) {
     EXPECT_EQ(ema->wait(std::chrono::seconds(5)), 0);
     EXPECT_THAT(ema->out(), HasSubstr("heartbeat lost"));
     // No frame may leave past the deadline, with one exception the EMA cannot prevent: it checks
-    // the watchdog right before each transmit, but a process descheduled between a passing check
-    // and the write sends that one frame late. Then its next check is itself late, and the EMA's
+    // the watchdog right before each transmit call, but a process descheduled between a passing
+    // check and the call sends that call's frames late. Then its next check is itself late, and the EMA's
     // log says so ("heartbeat lost: none for X ms" with X past the deadline and the slack). Any
     // other late frame, or a late frame without such a late detection, means it kept running.
     double detected_ms = 0;
     const std::string tag = "heartbeat lost: none for ";
     if (const auto at = ema->out().find(tag); at != std::string::npos) detected_ms = std::atof(ema->out().c_str() + at + tag.size());
     const double late_detection_ms = std::chrono::duration<double, std::milli>(kWatchdog + kTransmitSlack).count();
-    const bool descheduled_across_deadline = late == 1 && detected_ms > late_detection_ms;
+    // The EMA transmits what is due in one call (sendmmsg): a process descheduled between its check
+    // and that call sends that one call's frames late, all within a moment of each other.
+    constexpr auto kOneTransmitCall = std::chrono::milliseconds(1);
+    std::chrono::nanoseconds first_late{0}, last_late{0};
+    for (const auto& f : ema_frames)
+        if (f.t > deadline + kTransmitSlack && f.t < aborted_at) {
+            if (first_late.count() == 0) first_late = f.t;
+            last_late = f.t;
+        }
+    const bool one_call = late > 0 && last_late - first_late <= kOneTransmitCall && late <= 8;
+    const bool descheduled_across_deadline = one_call && detected_ms > late_detection_ms;
     EXPECT_TRUE(late == 0 || descheduled_across_deadline)
         << "the EMA kept running past the 100 ms heartbeat deadline (" << late << " late frames, watchdog fired at "
         << detected_ms << " ms)\n" << ema->out();
@@ -281,8 +316,8 @@ TEST_F(Vcan, InjectedFrameLossAndCrcErrorsAreDetected) {
     // The tool's counts equal what the EMA injected.
     unsigned long long sent = 0, dropped = 0, corrupted = 0, started = 0, done = 0, aborted = 0;
     const std::string o = ema->out();
-    const auto at = o.find("ema-sim: ");
-    ASSERT_NE(at, std::string::npos);
+    const auto at = o.rfind("ema-sim: ", o.find(" sequences started"));
+    ASSERT_NE(at, std::string::npos) << o;
     ASSERT_EQ(std::sscanf(o.c_str() + at,
                           "ema-sim: %llu sequences started, %llu done, %llu aborted; %llu telemetry frames sent, %llu dropped, %llu CRC corrupted",
                           &started, &done, &aborted, &sent, &dropped, &corrupted),
@@ -467,4 +502,181 @@ TEST_F(Vcan, TechnicianTestRunRefusesAnEmaThatDoesNotReportGroundTest) {
     ema->signal(SIGINT);
     EXPECT_EQ(ema->wait(std::chrono::seconds(5)), 0);
     EXPECT_THAT(ema->out(), HasSubstr("ema-sim: 0 sequences started"));
+}
+
+// ---- The fault table (tests/README.md): what a technician gets for each fault on the bus. ----
+
+// 1 % random telemetry drops on every sequence: the loss rule (0.1 %) invalidates DYN, the tool runs
+// it once more on its own, the loss persists: NO_TEST, both attempts stored with their raw logs.
+TEST_F(Vcan, FaultTablePersistentOnePercentDropsEndNoTestAfterOneRetry) {
+    auto ema = start_ema_idle({"--case", "A", "--drop-fraction", "0.01", "--fault-seed", "4"});
+    auto run = start_test_run("test-run", "m.db", "logs");
+    const int rc = run->wait(std::chrono::seconds(90));
+    std::cout << run->out();
+    EXPECT_EQ(rc, 2) << run->out() << run->err() << ema->out();
+    EXPECT_THAT(run->out(), HasSubstr("dyn: invalid after a transient loss (telemetry loss"));
+    EXPECT_THAT(run->out(), HasSubstr("running dyn again"));
+    EXPECT_THAT(run->out(), HasSubstr("VERDICT: NO_TEST"));
+    EXPECT_THAT(run->err(), HasSubstr("NO_TEST: the EMA was not assessed"));
+    EXPECT_EQ(ema->wait(std::chrono::seconds(20)), 0);
+    const auto sessions = sessions_in(path("m.db"));
+    ASSERT_EQ(sessions.size(), 1u);
+    EXPECT_EQ(sessions[0].verdict, "NO_TEST");
+    ASSERT_EQ(sessions[0].runs.size(), 2u);  // dyn, dyn again; brk never commanded
+    for (const auto& r : sessions[0].runs) {
+        EXPECT_FALSE(r.valid);
+        EXPECT_THAT(r.status_note, HasSubstr("telemetry loss"));
+        EXPECT_EQ(r.raw_log, slurp(nlohmann::json::parse(r.meta_json).value("log_file", "")));
+    }
+}
+
+// A burst of 50 dropped frames in the first sequence only (a transient): DYN is run again and the
+// session ends in a verdict; the lost attempt is kept in the record.
+TEST_F(Vcan, FaultTableBurstOfFiftyDroppedFramesIsRetriedOnceAndTheSessionCompletes) {
+    auto ema = start_ema_idle({"--case", "A", "--noise", "typical", "--seed", "5", "--drop-burst", "50", "--fault-sequences", "1"});
+    auto run = start_test_run("test-run", "m.db", "logs");
+    const int rc = run->wait(std::chrono::seconds(90));
+    std::cout << run->out();
+    EXPECT_EQ(rc, 0) << run->out() << run->err() << ema->out();
+    EXPECT_THAT(run->out(), HasSubstr("50 frames lost"));
+    EXPECT_THAT(run->out(), HasSubstr("running dyn again"));
+    EXPECT_THAT(run->out(), HasSubstr("VERDICT: SERVICEABLE"));
+    EXPECT_EQ(ema->wait(std::chrono::seconds(20)), 0);
+    const auto sessions = sessions_in(path("m.db"));
+    ASSERT_EQ(sessions.size(), 1u);
+    EXPECT_EQ(sessions[0].verdict, "SERVICEABLE");
+    ASSERT_EQ(sessions[0].runs.size(), 3u);
+    EXPECT_FALSE(sessions[0].runs[0].valid);
+    EXPECT_TRUE(sessions[0].runs[1].valid);
+    EXPECT_THAT(sessions[0].runs[1].status_note, HasSubstr("attempt 2"));
+    EXPECT_TRUE(sessions[0].runs[2].valid);
+}
+
+// Duplicated and reordered frames lose nothing: the samples are placed by index and equal the
+// direct simulation; every duplicate is counted.
+TEST_F(Vcan, FaultTableDuplicatedAndReorderedFramesGiveTheSameSamples) {
+    auto ema = start_ema({"--case", "B", "--noise", "typical", "--seed", "31", "--duplicate-fraction", "0.02", "--reorder-fraction",
+                          "0.02", "--fault-seed", "9"});
+    auto rec = start_record("dyn", "dupes");
+    ASSERT_EQ(rec->wait(std::chrono::seconds(60)), 0) << rec->out() << rec->err() << ema->out();
+    EXPECT_EQ(ema->wait(std::chrono::seconds(10)), 0);
+    unsigned long long duplicated = 0, reordered = 0;
+    const std::string o = ema->out();
+    const auto at = o.find(" CRC corrupted, ");
+    ASSERT_NE(at, std::string::npos) << o;
+    ASSERT_EQ(std::sscanf(o.c_str() + at, " CRC corrupted, %llu duplicated, %llu reordered", &duplicated, &reordered), 2) << o;
+    EXPECT_GT(duplicated, 0u);
+    EXPECT_GT(reordered, 0u);
+    const emadiag::Run run = read_run_csv_file(path("dupes.csv"));
+    EXPECT_EQ(run.meta_value("valid"), std::optional<std::string>("true"));
+    EXPECT_EQ(run.meta_value("frames_lost"), std::optional<std::string>("0"));
+    EXPECT_EQ(run.meta_value("duplicates"), std::optional<std::string>(std::to_string(duplicated)));
+    sim::SimConfig direct;
+    direct.load_case = sim::LoadCase::B;
+    direct.noise = sim::parse_noise("typical");
+    direct.seed = 31;
+    direct.sequence = sim::Sequence::Dyn;
+    EXPECT_TRUE(test::samples_within_resolution(run, sim::simulate(direct), &std::cout));
+}
+
+// The EMA goes silent mid-DYN for good: the tool names the silence, tries once more, gets no
+// answer, and stores the first attempt as NO_TEST.
+TEST_F(Vcan, FaultTableEmaSilentMidSequenceIsNamedAndStoredAsNoTest) {
+    auto ema = start_ema_idle({"--case", "A", "--silent-after", "0.5"});
+    auto run = start_test_run("test-run", "m.db", "logs");
+    const int rc = run->wait(std::chrono::seconds(60));
+    std::cout << run->out() << run->err();
+    EXPECT_NE(rc, 0);
+    EXPECT_THAT(run->out(), HasSubstr("went silent: no frame for 500 ms during the sequence"));
+    EXPECT_THAT(run->err(), HasSubstr("no EMA answered on " + bus_spec()));
+    EXPECT_THAT(run->err(), HasSubstr("verdict NO_TEST"));
+    const auto sessions = sessions_in(path("m.db"));
+    ASSERT_EQ(sessions.size(), 1u);
+    EXPECT_EQ(sessions[0].verdict, "NO_TEST");
+    ASSERT_GE(sessions[0].runs.size(), 1u);
+    EXPECT_THAT(sessions[0].runs[0].status_note, HasSubstr("went silent"));
+    EXPECT_EQ(ema->wait(std::chrono::seconds(20)), 0);
+}
+
+// Error frames are logged; bus-off ends the test: a clear error, the partial run stored as NO_TEST
+// with its raw log, and the EMA (no more heartbeat) holds position within its 100 ms watchdog.
+TEST_F(Vcan, FaultTableErrorFramesThenBusOffEndTheTestCleanly) {
+    auto ema = start_ema_idle({"--case", "A"});
+    auto run = start_test_run("test-run", "m.db", "logs", {"--sequences", "brk"});
+    ASSERT_TRUE(ema->wait_output("streaming", std::chrono::seconds(30))) << ema->out();
+    for (const char* frame : {"20000004#0004000000000000", "20000004#0010000000000000", "20000040#0000000000000000"}) {
+        Process cansend({"cansend", iface(), frame}, path("cansend.out"));
+        ASSERT_EQ(cansend.wait(std::chrono::seconds(5)), 0) << cansend.err();
+        std::this_thread::sleep_for(std::chrono::milliseconds(30));
+    }
+    const int rc = run->wait(std::chrono::seconds(30));
+    std::cout << run->out() << run->err();
+    EXPECT_EQ(rc, 1) << run->out() << run->err();
+    EXPECT_THAT(run->err(), HasSubstr("bus-off"));
+    EXPECT_THAT(run->err(), HasSubstr("verdict NO_TEST"));
+    EXPECT_EQ(ema->wait(std::chrono::seconds(20)), 0);
+    EXPECT_THAT(ema->out(), HasSubstr("heartbeat lost"));
+    const auto sessions = sessions_in(path("m.db"));
+    ASSERT_EQ(sessions.size(), 1u);
+    ASSERT_EQ(sessions[0].runs.size(), 1u);
+    EXPECT_THAT(sessions[0].runs[0].raw_log, HasSubstr("20000004#0004000000000000"));  // the error frames are in the log
+    EXPECT_THAT(sessions[0].runs[0].raw_log, HasSubstr("20000040#"));
+}
+
+// kill -9 of the tool mid-sequence: the EMA holds position within its 100 ms watchdog; the next
+// test-run stores the spooled session (NO_TEST, its raw log byte for byte) before its own.
+TEST_F(Vcan, FaultTableToolKilledMidRunIsHeldByTheEmaAndRecoveredByTheNextTestRun) {
+    auto ema = start_ema_idle({"--case", "A", "--noise", "typical", "--seed", "5"});
+    auto first = start_test_run("first", "m.db", "logs");
+    ASSERT_TRUE(ema->wait_output("streaming", std::chrono::seconds(30))) << ema->out();
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    first->signal(SIGKILL);
+    EXPECT_EQ(first->wait(std::chrono::seconds(5)), 128 + SIGKILL);
+    ASSERT_TRUE(ema->wait_output("heartbeat lost", std::chrono::seconds(5))) << ema->out();
+    double detected_ms = 0;
+    const std::string tag = "heartbeat lost: none for ";
+    const std::string o = ema->out();
+    detected_ms = std::atof(o.c_str() + o.find(tag) + tag.size());
+    EXPECT_GT(detected_ms, 100.0);
+    EXPECT_LT(detected_ms, 150.0) << o;  // held within the watchdog's period plus one descheduled pass
+    ASSERT_EQ(ema->wait(std::chrono::seconds(20)), 0);  // idle exit: the tool is gone
+
+    auto ema2 = start_ema_idle({"--case", "A", "--noise", "typical", "--seed", "5"}, "ema2");
+    auto second = start_test_run("second", "m.db", "logs");
+    const int rc = second->wait(std::chrono::seconds(90));
+    std::cout << second->out();
+    EXPECT_EQ(rc, 0) << second->out() << second->err() << ema2->out();
+    EXPECT_THAT(second->out(), HasSubstr("recovered spooled session N123EM_"));
+    EXPECT_THAT(second->out(), HasSubstr("verdict NO_TEST (recovered from the spool: the tool stopped mid-session (while recording dyn))"));
+    EXPECT_EQ(ema2->wait(std::chrono::seconds(20)), 0);
+    const auto sessions = sessions_in(path("m.db"));
+    ASSERT_EQ(sessions.size(), 2u);
+    EXPECT_EQ(sessions[0].verdict, "NO_TEST");
+    ASSERT_EQ(sessions[0].runs.size(), 1u);
+    EXPECT_EQ(sessions[0].runs[0].raw_log, slurp(nlohmann::json::parse(sessions[0].runs[0].meta_json).value("log_file", "")));
+    EXPECT_EQ(sessions[1].verdict, "SERVICEABLE");
+    // Nothing stored twice: recover finds nothing left.
+    Process recover({EMADIAG_CLI, "recover", "--db", path("m.db")}, path("recover.out"));
+    EXPECT_EQ(recover.wait(std::chrono::seconds(20)), 0);
+    EXPECT_THAT(recover.out(), HasSubstr("recover: 0 spooled session(s) stored"));
+    EXPECT_EQ(sessions_in(path("m.db")).size(), 2u);
+}
+
+// A second tool on the same bus: it hears the first one's heartbeat, commands nothing, names the
+// conflict and stores nothing; the first tool's session completes and is stored once.
+TEST_F(Vcan, FaultTableSecondToolIsRefusedNamedAndStoresNothing) {
+    auto ema = start_ema_idle({"--case", "A", "--noise", "typical", "--seed", "5"});
+    auto first = start_test_run("first", "m.db", "logs-1");
+    ASSERT_TRUE(ema->wait_output("streaming", std::chrono::seconds(30))) << ema->out();
+    auto second = start_test_run("second", "m.db", "logs-2");
+    const int rc2 = second->wait(std::chrono::seconds(30));
+    EXPECT_EQ(rc2, 1) << second->out() << second->err();
+    EXPECT_THAT(second->err(), HasSubstr("another tool is active on " + bus_spec() + ": heard TOOL_Heartbeat (0x011) from another tool"));
+    const int rc1 = first->wait(std::chrono::seconds(90));
+    std::cout << first->out();
+    EXPECT_EQ(rc1, 0) << first->out() << first->err() << ema->out();
+    EXPECT_EQ(ema->wait(std::chrono::seconds(20)), 0);
+    const auto sessions = sessions_in(path("m.db"));
+    ASSERT_EQ(sessions.size(), 1u);
+    EXPECT_EQ(sessions[0].verdict, "SERVICEABLE");
 }

@@ -16,6 +16,8 @@
 
 #include <cerrno>
 #include <cstring>
+#include <algorithm>
+#include <array>
 #include <thread>
 
 namespace emadiag::can {
@@ -100,8 +102,8 @@ SocketCanBus::~SocketCanBus() {
     if (fd_ >= 0) ::close(fd_);
 }
 
-SendStatus SocketCanBus::send(const CanFrame& f) {
-    canfd_frame cf{};
+std::size_t SocketCanBus::to_kernel(const CanFrame& f, canfd_frame& cf) const {
+    cf = canfd_frame{};
     cf.can_id = f.extended ? ((f.id & CAN_EFF_MASK) | CAN_EFF_FLAG) : (f.id & CAN_SFF_MASK);
     if (f.rtr) cf.can_id |= CAN_RTR_FLAG;
     const std::size_t max = f.fd ? CANFD_MAX_DLEN : CAN_MAX_DLEN;
@@ -111,7 +113,12 @@ SendStatus SocketCanBus::send(const CanFrame& f) {
     cf.len = f.len;
     if (f.fd) cf.flags = static_cast<__u8>((f.brs ? CANFD_BRS : 0) | (f.esi ? CANFD_ESI : 0));
     std::memcpy(cf.data, f.data.data(), f.len);
-    const std::size_t mtu = f.fd ? CANFD_MTU : CAN_MTU;
+    return f.fd ? CANFD_MTU : CAN_MTU;
+}
+
+SendStatus SocketCanBus::send(const CanFrame& f) {
+    canfd_frame cf;
+    const std::size_t mtu = to_kernel(f, cf);
     const auto deadline = std::chrono::steady_clock::now() + options_.send_timeout;
     for (;;) {
         const ssize_t n = ::write(fd_, &cf, mtu);
@@ -126,64 +133,128 @@ SendStatus SocketCanBus::send(const CanFrame& f) {
     }
 }
 
+BatchSendResult SocketCanBus::send_batch(const std::vector<CanFrame>& frames) {
+    BatchSendResult result;
+    std::size_t done = 0;
+    while (done < frames.size()) {
+        const std::size_t n = std::min(frames.size() - done, kMaxBatch);
+        std::array<canfd_frame, kMaxBatch> cf;
+        std::array<iovec, kMaxBatch> iov;
+        std::array<mmsghdr, kMaxBatch> msgs{};
+        for (std::size_t i = 0; i < n; ++i) {
+            iov[i].iov_base = &cf[i];
+            iov[i].iov_len = to_kernel(frames[done + i], cf[i]);
+            msgs[i].msg_hdr.msg_iov = &iov[i];
+            msgs[i].msg_hdr.msg_iovlen = 1;
+        }
+        const int sent = ::sendmmsg(fd_, msgs.data(), static_cast<unsigned>(n), 0);
+        if (sent > 0) {
+            done += static_cast<std::size_t>(sent);
+            result.sent = done;
+            continue;
+        }
+        // Nothing went out: the single-frame path waits for a full queue and classifies the error.
+        result.status = send(frames[done]);
+        if (result.status != SendStatus::Sent) return result;
+        result.sent = ++done;
+    }
+    return result;
+}
+
+ReceiveResult SocketCanBus::from_kernel(const canfd_frame& cf, std::size_t bytes, const msghdr& msg) const {
+    CanFrame f;
+    for (const cmsghdr* c = CMSG_FIRSTHDR(&msg); c != nullptr; c = CMSG_NXTHDR(const_cast<msghdr*>(&msg), const_cast<cmsghdr*>(c))) {
+        if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS) {
+            timespec t;
+            std::memcpy(&t, CMSG_DATA(c), sizeof t);
+            f.timestamp = std::chrono::seconds(t.tv_sec) + std::chrono::nanoseconds(t.tv_nsec);
+        }
+    }
+    if (bytes == CANFD_MTU) {
+        f.fd = true;
+        f.brs = (cf.flags & CANFD_BRS) != 0;
+        f.esi = (cf.flags & CANFD_ESI) != 0;
+    } else if (bytes != CAN_MTU) {
+        throw CanError(spec_ + ": received " + std::to_string(bytes) + " bytes, neither CAN_MTU nor CANFD_MTU");
+    }
+    f.len = static_cast<std::uint8_t>(std::min<std::size_t>(cf.len, f.fd ? CANFD_MAX_DLEN : CAN_MAX_DLEN));
+    std::memcpy(f.data.data(), cf.data, f.len);
+    if (cf.can_id & CAN_ERR_FLAG) {
+        f.error = true;
+        f.id = cf.can_id & CAN_ERR_MASK;
+        can_frame classic{};
+        classic.can_id = cf.can_id;
+        std::memcpy(classic.data, cf.data, CAN_MAX_DLEN);
+        const std::string what = describe_error_frame(classic);
+        if (cf.can_id & CAN_ERR_BUSOFF) return ReceiveResult{ReceiveStatus::BusOff, f, spec_ + ": " + what};
+        return ReceiveResult{ReceiveStatus::ErrorFrame, f, spec_ + ": " + what};
+    }
+    f.extended = (cf.can_id & CAN_EFF_FLAG) != 0;
+    f.rtr = (cf.can_id & CAN_RTR_FLAG) != 0;
+    f.id = f.extended ? (cf.can_id & CAN_EFF_MASK) : (cf.can_id & CAN_SFF_MASK);
+    return ReceiveResult{ReceiveStatus::Frame, f, {}};
+}
+
+bool SocketCanBus::wait_readable(std::chrono::microseconds timeout) const {
+    const long long us = timeout.count() < 0 ? 0 : timeout.count();
+    timespec ts{static_cast<time_t>(us / 1000000), static_cast<long>((us % 1000000) * 1000)};
+    pollfd p{fd_, POLLIN, 0};
+    const int r = ::ppoll(&p, 1, &ts, nullptr);
+    if (r < 0) {
+        if (errno == EINTR) return false;
+        throw CanError(spec_ + ": poll failed: " + errno_text(errno));
+    }
+    return r > 0;
+}
+
 ReceiveResult SocketCanBus::receive(std::chrono::microseconds timeout) {
+    std::vector<ReceiveResult> one;
+    if (receive_batch(one, 1, timeout) == 0) return ReceiveResult{ReceiveStatus::Timeout, {}, {}};
+    return std::move(one.front());
+}
+
+std::size_t SocketCanBus::receive_batch(std::vector<ReceiveResult>& out, std::size_t max_results, std::chrono::microseconds timeout) {
+    if (max_results == 0) return 0;
     const auto deadline = std::chrono::steady_clock::now() + timeout;
-    for (;;) {
-        const auto left = std::chrono::duration_cast<std::chrono::microseconds>(deadline - std::chrono::steady_clock::now());
-        const long long left_us = left.count() < 0 ? 0 : left.count();
-        timespec ts{static_cast<time_t>(left_us / 1000000), static_cast<long>((left_us % 1000000) * 1000)};
-        pollfd p{fd_, POLLIN, 0};
-        const int r = ::ppoll(&p, 1, &ts, nullptr);
-        if (r < 0) {
-            if (errno == EINTR) return ReceiveResult{ReceiveStatus::Timeout, {}, "interrupted"};
-            throw CanError(spec_ + ": poll failed: " + errno_text(errno));
-        }
-        if (r == 0) return ReceiveResult{ReceiveStatus::Timeout, {}, {}};
-        canfd_frame cf{};
-        iovec iov{&cf, sizeof cf};
+    struct Slot {
+        canfd_frame cf;
+        iovec iov;
         alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timespec)) + 64];
-        msghdr msg{};
-        msg.msg_iov = &iov;
-        msg.msg_iovlen = 1;
-        msg.msg_control = control;
-        msg.msg_controllen = sizeof control;
-        const ssize_t n = ::recvmsg(fd_, &msg, MSG_DONTWAIT);
-        if (n < 0) {
-            if (errno == EAGAIN || errno == EINTR) continue;
-            if (errno == ENETDOWN) return ReceiveResult{ReceiveStatus::BusOff, {}, spec_ + ": interface down"};
-            throw CanError(spec_ + ": receive failed: " + errno_text(errno));
+    };
+    const std::size_t n = std::min(max_results, kMaxBatch);
+    std::array<Slot, kMaxBatch> slots;
+    std::array<mmsghdr, kMaxBatch> msgs{};
+    bool waited = false;
+    for (;;) {
+        for (std::size_t i = 0; i < n; ++i) {
+            slots[i].iov = iovec{&slots[i].cf, sizeof slots[i].cf};
+            msgs[i] = mmsghdr{};
+            msgs[i].msg_hdr.msg_iov = &slots[i].iov;
+            msgs[i].msg_hdr.msg_iovlen = 1;
+            msgs[i].msg_hdr.msg_control = slots[i].control;
+            msgs[i].msg_hdr.msg_controllen = sizeof slots[i].control;
         }
-        CanFrame f;
-        for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c != nullptr; c = CMSG_NXTHDR(&msg, c)) {
-            if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS) {
-                timespec t;
-                std::memcpy(&t, CMSG_DATA(c), sizeof t);
-                f.timestamp = std::chrono::seconds(t.tv_sec) + std::chrono::nanoseconds(t.tv_nsec);
+        // Try first without waiting: under load frames are usually queued, and one system call
+        // then takes a whole batch.
+        const int got = ::recvmmsg(fd_, msgs.data(), static_cast<unsigned>(n), MSG_DONTWAIT, nullptr);
+        if (got > 0) {
+            std::size_t appended = 0;
+            for (std::size_t i = 0; i < static_cast<std::size_t>(got); ++i) {
+                out.push_back(from_kernel(slots[i].cf, msgs[i].msg_len, msgs[i].msg_hdr));
+                ++appended;
             }
+            return appended;
         }
-        if (n == CANFD_MTU) {
-            f.fd = true;
-            f.brs = (cf.flags & CANFD_BRS) != 0;
-            f.esi = (cf.flags & CANFD_ESI) != 0;
-        } else if (n != CAN_MTU) {
-            throw CanError(spec_ + ": received " + std::to_string(n) + " bytes, neither CAN_MTU nor CANFD_MTU");
+        const int e = errno;
+        if (got < 0 && e == ENETDOWN) {
+            out.push_back(ReceiveResult{ReceiveStatus::BusOff, {}, spec_ + ": interface down"});
+            return 1;
         }
-        f.len = static_cast<std::uint8_t>(std::min<std::size_t>(cf.len, f.fd ? CANFD_MAX_DLEN : CAN_MAX_DLEN));
-        std::memcpy(f.data.data(), cf.data, f.len);
-        if (cf.can_id & CAN_ERR_FLAG) {
-            f.error = true;
-            f.id = cf.can_id & CAN_ERR_MASK;
-            can_frame classic{};
-            classic.can_id = cf.can_id;
-            std::memcpy(classic.data, cf.data, CAN_MAX_DLEN);
-            const std::string what = describe_error_frame(classic);
-            if (cf.can_id & CAN_ERR_BUSOFF) return ReceiveResult{ReceiveStatus::BusOff, f, spec_ + ": " + what};
-            return ReceiveResult{ReceiveStatus::ErrorFrame, f, spec_ + ": " + what};
-        }
-        f.extended = (cf.can_id & CAN_EFF_FLAG) != 0;
-        f.rtr = (cf.can_id & CAN_RTR_FLAG) != 0;
-        f.id = f.extended ? (cf.can_id & CAN_EFF_MASK) : (cf.can_id & CAN_SFF_MASK);
-        return ReceiveResult{ReceiveStatus::Frame, f, {}};
+        if (got < 0 && e != EAGAIN && e != EWOULDBLOCK && e != EINTR) throw CanError(spec_ + ": receive failed: " + errno_text(e));
+        const auto left = std::chrono::duration_cast<std::chrono::microseconds>(deadline - std::chrono::steady_clock::now());
+        if (waited && left.count() <= 0) return 0;
+        if (!wait_readable(std::max(left, std::chrono::microseconds{0}))) return 0;
+        waited = true;
     }
 }
 

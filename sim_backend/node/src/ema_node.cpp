@@ -3,6 +3,7 @@
 
 #include "emadiag/can/can_error.hpp"
 
+#include <algorithm>
 #include <cmath>
 #ifdef __linux__
 #include <pthread.h>
@@ -26,6 +27,11 @@ namespace {
 
 /// The loop wakes at least this often, so the watchdog fires within this much of its deadline.
 constexpr std::chrono::milliseconds kMaxLoopSleep{2};
+/// Telemetry pacing: a sample is sent no earlier than its due time and at most this much after
+/// it, so one wake-up and one transmit call carry every sample due in the window (can_dbc/ICD.md).
+constexpr std::chrono::microseconds kTelemetryBatchWindow{1000};
+/// Frames taken from the bus per receive call.
+constexpr std::size_t kReceiveBatch = 64;
 constexpr double kMaxTimeScale = 1000.0;
 /// XOR applied to the CRC byte of a frame chosen for corruption (any non-zero value is detected).
 constexpr std::uint8_t kCrcCorruption = 0x5A;
@@ -73,6 +79,9 @@ void EmaNodeFaults::validate() const {
     };
     fraction("drop_fraction", drop_fraction);
     fraction("corrupt_crc_fraction", corrupt_crc_fraction);
+    fraction("drop_burst_at_fraction", drop_burst_at_fraction);
+    fraction("duplicate_fraction", duplicate_fraction);
+    fraction("reorder_fraction", reorder_fraction);
     if (silent_after_fraction) fraction("silent_after_fraction", *silent_after_fraction);
 }
 
@@ -85,6 +94,9 @@ struct EmaNode::Running {
     std::size_t silent_at = 0;
     std::uint8_t counter_a = 0;
     std::uint8_t counter_b = 0;
+    std::size_t frames_made = 0;   ///< telemetry frames produced so far (the burst counts in them)
+    std::size_t burst_first = 0;   ///< first frame of the injected burst of drops
+    std::optional<can::CanFrame> held;  ///< a frame held back to go out after the next one
 };
 
 EmaNode::EmaNode(can::CanBus& bus, EmaNodeConfig config)
@@ -111,7 +123,50 @@ void EmaNode::event(const std::string& what) {
 
 void EmaNode::send(const can::CanFrame& f) {
     if (silent_) return;
-    if (bus_.send(f) != can::SendStatus::Sent) ++stats_.send_failures;
+    tx_.push_back(f);
+}
+
+void EmaNode::flush_tx() {
+    if (tx_.empty()) return;
+    // The watchdog on a fresh clock reading right before the transmit call: past the deadline the
+    // queued telemetry is dropped, and only the ABORTED status (queued by finish) goes out.
+    const std::size_t queued = tx_.size();
+    if (watchdog_expired()) {
+        // finish() appended the ABORTED status; telemetry and status queued before it stay unsent.
+        const auto is_stream = [](const can::CanFrame& f) {
+            return f.id == can::icd::kTelemetryAId || f.id == can::icd::kTelemetryBId || f.id == can::icd::kStatusId;
+        };
+        tx_.erase(std::remove_if(tx_.begin(), tx_.begin() + static_cast<std::ptrdiff_t>(queued), is_stream),
+                  tx_.begin() + static_cast<std::ptrdiff_t>(queued));
+    }
+    const can::BatchSendResult r = bus_.send_batch(tx_);
+    ++stats_.send_calls;
+    for (std::size_t i = 0; i < r.sent; ++i)
+        if (tx_[i].id == can::icd::kTelemetryAId || tx_[i].id == can::icd::kTelemetryBId) ++stats_.telemetry_frames_sent;
+    stats_.send_failures += tx_.size() - r.sent;
+    tx_.clear();
+}
+
+bool EmaNode::faults_active() const {
+    return config_.faults.fault_sequences == 0 || stats_.sequences_started <= config_.faults.fault_sequences;
+}
+
+HeartbeatGapStats EmaNode::heartbeat_gaps() const {
+    HeartbeatGapStats g;
+    g.count = heartbeat_gaps_ms_.size();
+    if (g.count == 0) return g;
+    std::vector<double> v = heartbeat_gaps_ms_;
+    std::sort(v.begin(), v.end());
+    auto q = [&](double p) { return v[std::min(v.size() - 1, static_cast<std::size_t>(std::ceil(p * static_cast<double>(v.size()))) - 1)]; };
+    g.p50_ms = q(0.50);
+    g.p99_ms = q(0.99);
+    g.max_ms = v.back();
+    return g;
+}
+
+std::optional<std::chrono::steady_clock::duration> EmaNode::tool_idle() const {
+    if (!last_tool_frame_) return std::nullopt;
+    return Clock::now() - *last_tool_frame_;
 }
 
 void EmaNode::send_status() {
@@ -125,25 +180,22 @@ void EmaNode::run(const std::atomic<bool>& stop) {
 
 void EmaNode::poll(std::chrono::microseconds max_wait) {
     auto now = Clock::now();
-    // Wait until the next thing that is due (status, sample), at most max_wait.
+    // Sleep until the next thing that is due (status, a window of samples), at most max_wait.
     Clock::time_point due = std::min(next_status_, now + max_wait);
     if (run_ && run_->streaming && run_->next < run_->samples.size()) {
         const auto sample_due = run_->stream_start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
                                                          static_cast<double>(run_->next + 1) * sim::kSamplePeriodS * config_.time_scale));
-        due = std::min(due, sample_due);
+        due = std::min(due, sample_due + kTelemetryBatchWindow);
     }
     const auto wait = std::chrono::duration_cast<std::chrono::microseconds>(due - now);
-    can::ReceiveResult r = bus_.receive(std::max(wait, std::chrono::microseconds{0}));
+    // Everything queued in one receive call (recvmmsg on SocketCAN).
+    rx_.clear();
+    (void)bus_.receive_batch(rx_, kReceiveBatch, std::max(wait, std::chrono::microseconds{0}));
     now = Clock::now();
-    if (r.status == can::ReceiveStatus::Frame) handle(r.frame, now);
-    else if (r.status == can::ReceiveStatus::BusOff) event("bus-off: " + r.detail);
-    // Drain whatever else is queued without waiting.
-    for (int i = 0; i < 64; ++i) {
-        can::ReceiveResult more = bus_.receive(std::chrono::microseconds{0});
-        if (more.status != can::ReceiveStatus::Frame) break;
-        handle(more.frame, Clock::now());
+    for (const auto& r : rx_) {
+        if (r.status == can::ReceiveStatus::Frame) handle(r.frame, now);
+        else if (r.status == can::ReceiveStatus::BusOff) event("bus-off: " + r.detail);
     }
-    now = Clock::now();
 
     (void)watchdog_expired();
 
@@ -154,10 +206,12 @@ void EmaNode::poll(std::chrono::microseconds max_wait) {
             result = run_->simulation.get();
         } catch (const std::exception& e) {
             finish(SequenceState::Aborted, FaultCode::SimulationFailed, std::string("simulation failed: ") + e.what());
+            flush_tx();
             return;
         }
         if (!result.finite) {
             finish(SequenceState::Aborted, FaultCode::SimulationFailed, "simulation diverged (NaN or inf)");
+            flush_tx();
             return;
         }
         run_->samples = std::move(result.samples);
@@ -166,28 +220,39 @@ void EmaNode::poll(std::chrono::microseconds max_wait) {
         run_->silent_at = config_.faults.silent_after_fraction
                               ? static_cast<std::size_t>(std::floor(*config_.faults.silent_after_fraction * static_cast<double>(run_->samples.size())))
                               : run_->samples.size() + 1;
+        run_->burst_first = static_cast<std::size_t>(
+            std::floor(config_.faults.drop_burst_at_fraction * 2.0 * static_cast<double>(run_->samples.size())));
         event("streaming " + std::to_string(run_->samples.size()) + " samples");
     }
     if (run_ && run_->streaming) stream_due(now);
 
-    if (now >= next_status_ && !watchdog_expired()) {
+    if (now >= next_status_) {
         send_status();
         next_status_ += can::icd::kStatusPeriod;
         if (next_status_ < now) next_status_ = now + can::icd::kStatusPeriod;
     }
+    flush_tx();
 }
 
 void EmaNode::handle(const can::CanFrame& f, Clock::time_point now) {
     if (f.extended || f.error) return;
+    if (f.id == can::icd::kToolHeartbeatId || f.id == can::icd::kToolCommandId) last_tool_frame_ = now;
     if (f.id == can::icd::kToolHeartbeatId) {
         // Date the heartbeat from its arrival on the bus (receive timestamp), not from when this loop
         // got to it, so a late pass cannot stretch the 100 ms deadline.
-        last_heartbeat_ = now;
+        Clock::time_point arrival = now;
         if (f.timestamp.count() > 0) {
             const auto age = std::chrono::system_clock::now().time_since_epoch() - f.timestamp;
             if (age > Clock::duration::zero() && age < config_.heartbeat_timeout)
-                last_heartbeat_ = now - std::chrono::duration_cast<Clock::duration>(age);
+                arrival = now - std::chrono::duration_cast<Clock::duration>(age);
         }
+        if (status_.mode == Mode::GroundTest) {
+            // The gap the watchdog sees: since the previous heartbeat, or since entry to ground test.
+            const Clock::time_point since = last_heartbeat_arrival_ ? std::max(*last_heartbeat_arrival_, last_heartbeat_) : last_heartbeat_;
+            heartbeat_gaps_ms_.push_back(std::chrono::duration<double, std::milli>(arrival - since).count());
+        }
+        last_heartbeat_ = arrival;
+        last_heartbeat_arrival_ = arrival;
         return;
     }
     if (auto c = icd_.decode_command(f)) handle_command(*c, now);
@@ -269,13 +334,17 @@ bool EmaNode::watchdog_expired() {
 void EmaNode::stream_due(Clock::time_point now) {
     Running& r = *run_;
     const double period_s = sim::kSamplePeriodS * config_.time_scale;
+    const bool faults = faults_active();
+    std::uniform_real_distribution<double> u(0.0, 1.0);  // only compared against fractions
+    auto draw = [&](double fraction) { return fraction > 0 && u(fault_rng_) < fraction; };
     while (r.next < r.samples.size()) {
         const auto due = r.stream_start + std::chrono::duration_cast<Clock::duration>(
                                               std::chrono::duration<double>(static_cast<double>(r.next + 1) * period_s));
-        if (due > now) return;
+        if (due > now) break;
         if (r.next == r.silent_at && !silent_) {
             event("going silent at sample " + std::to_string(r.next) + " (fault injection)");
             silent_ = true;
+            tx_.clear();
         }
         const sim::Sample& s = r.samples[r.next];
         const auto index = static_cast<std::uint16_t>(r.next);
@@ -289,16 +358,19 @@ void EmaNode::stream_due(Clock::time_point now) {
         }
         r.counter_a = static_cast<std::uint8_t>((r.counter_a + 1) % can::icd::kCounterModulo);
         r.counter_b = static_cast<std::uint8_t>((r.counter_b + 1) % can::icd::kCounterModulo);
-        std::uniform_real_distribution<double> u(0.0, 1.0);  // only compared against fractions
         for (can::CanFrame* f : {&a, &b}) {
-            // The watchdog is checked before every frame, not once per sample: a process descheduled
-            // between a passing check and its write can then leak one late frame, never a burst.
-            if (watchdog_expired()) return;
+            const std::size_t k = r.frames_made++;
             // Two draws per frame, always, so the fault pattern depends only on the seed.
-            const bool corrupt = config_.faults.corrupt_crc_fraction > 0 && u(fault_rng_) < config_.faults.corrupt_crc_fraction;
-            const bool drop = config_.faults.drop_fraction > 0 && u(fault_rng_) < config_.faults.drop_fraction;
-            if (silent_) continue;
-            if (drop) {
+            const bool corrupt = draw(config_.faults.corrupt_crc_fraction);
+            const bool drop = draw(config_.faults.drop_fraction);
+            const bool duplicate = draw(config_.faults.duplicate_fraction);
+            const bool reorder = draw(config_.faults.reorder_fraction);
+            if (silent_ || !faults) {
+                if (!silent_) send(*f);
+                continue;
+            }
+            const bool in_burst = config_.faults.drop_burst_frames > 0 && k >= r.burst_first && k < r.burst_first + config_.faults.drop_burst_frames;
+            if (drop || in_burst) {
                 ++stats_.telemetry_frames_dropped;
                 continue;
             }
@@ -306,11 +378,28 @@ void EmaNode::stream_due(Clock::time_point now) {
                 f->data[can::icd::kTelemetryCrcBytes] ^= kCrcCorruption;
                 ++stats_.telemetry_crc_corrupted;
             }
-            send(*f);
-            ++stats_.telemetry_frames_sent;
+            if (r.held) {  // the frame held back goes out after this one
+                send(*f);
+                send(*r.held);
+                r.held.reset();
+                ++stats_.telemetry_frames_reordered;
+            } else if (reorder) {
+                r.held = *f;
+            } else {
+                send(*f);
+            }
+            if (duplicate) {
+                send(*f);
+                ++stats_.telemetry_frames_duplicated;
+            }
         }
         ++r.next;
         status_.samples_sent = static_cast<std::uint16_t>(r.next);
+    }
+    if (r.next < r.samples.size()) return;
+    if (r.held) {
+        send(*r.held);
+        r.held.reset();
     }
     finish(SequenceState::Done, FaultCode::None, "sequence done: " + std::to_string(r.samples.size()) + " samples");
 }

@@ -151,7 +151,8 @@ TEST_F(TestRun, InvalidRunEndsTheSessionAsNoTestAndIsStillStored) {
     cfg.faults.drop_fraction = 0.05;  // telemetry loss above the recorder's limit
     cfg.faults.seed = 4;
     test::NodeRunner ema(hub, cfg);
-    const TestRunOptions o = options("G-EMAD");
+    TestRunOptions o = options("G-EMAD");
+    o.retry_transient = false;  // the retry has its own test
     const TestRunResult r = run_test(tool, o, interrupt_);
     EXPECT_EQ(r.assessment.verdict, Verdict::NoTest);
     EXPECT_THAT(r.assessment.reason, HasSubstr("the dyn run is not valid"));
@@ -199,4 +200,119 @@ TEST_F(TestRun, CtrlCAbortsTheSequenceAndStoresTheSessionAsNoTest) {
     ASSERT_EQ(sessions.size(), 1u);
     EXPECT_EQ(sessions[0].verdict, "NO_TEST");
     EXPECT_EQ(db::load_test_session(database, sessions[0].session_id).runs.at(0).raw_log, slurp(r.runs[0].log_path));
+}
+
+TEST_F(TestRun, TransientLossIsRunOnceMoreAndBothAttemptsAreStored) {
+    can::MemoryBusHub hub;
+    can::MemoryBus tool(hub, "tool");
+    auto cfg = ema_config(0.08, 0.12, 5);
+    cfg.faults.drop_burst_frames = 50;  // 1.25 % of DYN's frames, in the first sequence only
+    cfg.faults.fault_sequences = 1;
+    test::NodeRunner ema(hub, cfg);
+    std::vector<std::string> said;
+    TestRunOptions o = options("N123EM");
+    o.on_progress = [&](const std::string& line) { said.push_back(line); };
+    const TestRunResult r = run_test(tool, o, interrupt_);
+    EXPECT_EQ(r.assessment.verdict, Verdict::Serviceable) << r.assessment.reason;
+    ASSERT_EQ(r.runs.size(), 3u);
+    EXPECT_FALSE(r.runs[0].outcome.valid);
+    EXPECT_TRUE(r.runs[0].outcome.transient_loss);
+    EXPECT_EQ(r.runs[0].outcome.stats.frames_lost, 50u);
+    EXPECT_EQ(r.runs[1].sequence, "dyn");
+    EXPECT_EQ(r.runs[1].attempt, 2);
+    EXPECT_TRUE(r.runs[1].outcome.valid);
+    EXPECT_EQ(r.runs[2].sequence, "brk");
+    EXPECT_EQ(ema.stats().sequences_started, 3u);
+    bool told = false;
+    for (const auto& l : said) told = told || l.find("running dyn once more") != std::string::npos;
+    EXPECT_TRUE(told) << "the technician is told about the retry";
+    db::Database database(o.db_path);
+    const auto sessions = db::list_test_sessions(database, "N123EM");
+    ASSERT_EQ(sessions.size(), 1u);
+    const auto s = db::load_test_session(database, sessions[0].session_id);
+    ASSERT_EQ(s.runs.size(), 3u);
+    EXPECT_THAT(s.runs[1].status_note, HasSubstr("attempt 2"));
+    EXPECT_EQ(s.runs[0].raw_log, slurp(r.runs[0].log_path));
+    EXPECT_TRUE(std::filesystem::is_empty(spool_dir_for(o.db_path)));
+}
+
+TEST_F(TestRun, SpooledSessionOfAKilledToolIsRecoveredOnceNeverTwice) {
+    // What a kill -9 leaves: a raw log and a manifest still "recording".
+    const std::string log_path = (dir_ / "killed_dyn.log").string();
+    {
+        can::MemoryBusHub hub;
+        can::MemoryBus tool(hub, "tool");
+        test::NodeRunner ema(hub, ema_config(0.08, 0.12, 3));
+        can_tool::RecorderOptions ro;
+        ro.log_path = log_path;
+        can_tool::Recorder rec(tool, ro);
+        (void)rec.record(interrupt_);
+    }
+    const TestRunOptions o = options("N123EM");
+    SessionManifest m;
+    m.tail_number = "N123EM";
+    m.phase = kPhasePostFlight;
+    m.started_utc = "2026-11-24T10:00:00Z";
+    m.tool_version = "test";
+    m.limits_json = HealthLimits::datasheet_envelope().to_json().dump();
+    m.sequences = {"dyn", "brk"};
+    SessionSpool spool(spool_dir_for(o.db_path), m);
+    spool.add_log(SpooledLog{"dyn", 1, log_path});
+    // A manifest that cannot be read is reported and left in place, never deleted.
+    const auto bad = spool_dir_for(o.db_path) / "N999EM_bad.json";
+    std::ofstream(bad) << "{ not json";
+
+    std::vector<std::string> said;
+    const auto first = recover_spooled_sessions(o.db_path, [&](const std::string& l) { said.push_back(l); });
+    ASSERT_EQ(first.size(), 1u);
+    EXPECT_GT(first[0].db_session_id, 0);
+    EXPECT_EQ(first[0].verdict, "NO_TEST");
+    EXPECT_THAT(first[0].note, HasSubstr("the tool stopped mid-session (while recording dyn)"));
+    EXPECT_FALSE(std::filesystem::exists(spool.path()));
+    EXPECT_TRUE(std::filesystem::exists(bad));
+    bool reported = false;
+    for (const auto& l : said) reported = reported || l.find("N999EM_bad.json") != std::string::npos;
+    EXPECT_TRUE(reported);
+    {
+        db::Database database(o.db_path);
+        const auto sessions = db::list_test_sessions(database, "N123EM");
+        ASSERT_EQ(sessions.size(), 1u);
+        const auto s = db::load_test_session(database, sessions[0].session_id);
+        ASSERT_EQ(s.runs.size(), 1u);
+        EXPECT_EQ(s.runs[0].raw_log, slurp(log_path));
+        EXPECT_EQ(s.started_utc, "2026-11-24T10:00:00Z");
+    }
+    // The tool died after storing but before removing the manifest: not stored twice.
+    SessionSpool again(spool_dir_for(o.db_path), m);
+    again.add_log(SpooledLog{"dyn", 1, log_path});
+    const auto second = recover_spooled_sessions(o.db_path, nullptr);
+    ASSERT_EQ(second.size(), 1u);
+    EXPECT_EQ(second[0].db_session_id, 0);
+    EXPECT_THAT(second[0].note, HasSubstr("already stored"));
+    db::Database database(o.db_path);
+    EXPECT_EQ(db::list_test_sessions(database, "N123EM").size(), 1u);
+}
+
+TEST_F(TestRun, ASecondToolOnTheBusIsHeardAndNothingIsCommanded) {
+    can::MemoryBusHub hub;
+    can::MemoryBus tool(hub, "tool");
+    can::MemoryBus other(hub, "other");
+    test::NodeRunner ema(hub, ema_config(0.08, 0.12, 5));
+    std::atomic<bool> stop{false};
+    std::thread other_tool([&] {  // another tool's heartbeat, 50 Hz
+        const can::EmaIcd icd;
+        std::uint8_t c = 0;
+        while (!stop) {
+            (void)other.send(icd.encode_heartbeat(c++));
+            std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        }
+    });
+    const TestRunOptions o = options("N123EM");
+    EXPECT_THAT([&] { (void)run_test(tool, o, interrupt_); },
+                ::testing::ThrowsMessage<EmadiagError>(HasSubstr("another tool is active on memory:tool: heard TOOL_Heartbeat (0x011)")));
+    stop = true;
+    other_tool.join();
+    EXPECT_EQ(ema.stats().sequences_started, 0u);
+    db::Database database(o.db_path);
+    EXPECT_TRUE(db::list_test_sessions(database, "N123EM").empty());
 }

@@ -43,6 +43,15 @@ struct CanFilter {
     bool extended = false;
 };
 
+/// Result of a batched send: how many frames went out, and why the rest did not.
+struct [[nodiscard]] BatchSendResult {
+    std::size_t sent = 0;
+    SendStatus status = SendStatus::Sent;  ///< Sent when every frame went out
+};
+
+/// Thread safety: one thread may send (send, send_batch) while another receives (receive,
+/// receive_batch) on the same bus; the tool's heartbeat thread relies on it. Two threads may not
+/// receive at once.
 class CanBus {
 public:
     virtual ~CanBus() = default;
@@ -52,6 +61,13 @@ public:
 
     virtual SendStatus send(const CanFrame& frame) = 0;
     virtual ReceiveResult receive(std::chrono::microseconds timeout) = 0;
+    /// Sends `frames` in order, as few system calls as the bus allows (sendmmsg on SocketCAN).
+    /// Stops at the first frame that cannot go out.
+    virtual BatchSendResult send_batch(const std::vector<CanFrame>& frames);
+    /// Waits at most `timeout` for the first result, then appends everything already queued, up
+    /// to `max_results` in all (recvmmsg on SocketCAN), in bus order: an error frame, bus-off or
+    /// end of log sits where it happened. Returns the count appended; 0 is a timeout.
+    virtual std::size_t receive_batch(std::vector<ReceiveResult>& out, std::size_t max_results, std::chrono::microseconds timeout);
     /// Replaces the acceptance filters; an empty list accepts every frame.
     virtual void set_filters(const std::vector<CanFilter>& filters) = 0;
     /// The spec the bus was opened with ("socketcan:vcan0", "candump:run.log").

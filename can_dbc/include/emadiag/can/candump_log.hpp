@@ -7,6 +7,7 @@
 // Error frames are written with CAN_ERR_FLAG (0x20000000) in the 8-digit id, as candump does.
 #include "emadiag/can/can_frame.hpp"
 
+#include <chrono>
 #include <fstream>
 #include <optional>
 #include <string>
@@ -29,19 +30,35 @@ struct CandumpRecord {
 /// Empty lines are skipped.
 [[nodiscard]] std::vector<CandumpRecord> read_candump_file(const std::string& path);
 
-/// Appends frames to a candump log, one line each, flushed on flush() and on destruction.
+/// How much a CandumpWriter holds in memory before it writes to the file: whichever bound is
+/// reached first. A process killed outright loses at most this much of the log's tail.
+struct CandumpWriterBounds {
+    std::size_t max_buffered_bytes = std::size_t{64} << 10;
+    std::chrono::milliseconds max_buffered_time{200};
+};
+
+/// Appends frames to a candump log, one line each. Lines are buffered and written in one call
+/// when a bound of CandumpWriterBounds is reached, on flush() and on destruction (every exit
+/// path, exceptions included), so the file is complete and byte-exact once the writer is gone.
 class CandumpWriter {
 public:
     /// Creates or truncates `path`; throws CanError naming the path when it cannot be opened.
-    explicit CandumpWriter(const std::string& path);
+    explicit CandumpWriter(const std::string& path, CandumpWriterBounds bounds = {});
+    ~CandumpWriter();
+    CandumpWriter(const CandumpWriter&) = delete;
+    CandumpWriter& operator=(const CandumpWriter&) = delete;
     void write(const CanFrame& frame, const std::string& iface);
+    /// Writes what is buffered; throws CanError naming the path when the file cannot take it.
     void flush();
     [[nodiscard]] const std::string& path() const { return path_; }
     [[nodiscard]] std::size_t lines() const { return lines_; }
 
 private:
     std::string path_;
+    CandumpWriterBounds bounds_;
     std::ofstream out_;
+    std::string buffer_;
+    std::chrono::steady_clock::time_point last_flush_;
     std::size_t lines_ = 0;
 };
 

@@ -5,6 +5,9 @@
 
 #include <cstddef>
 
+struct canfd_frame;
+struct msghdr;
+
 namespace emadiag::can {
 
 struct SocketCanOptions {
@@ -23,13 +26,23 @@ public:
 
     SendStatus send(const CanFrame& frame) override;
     ReceiveResult receive(std::chrono::microseconds timeout) override;
+    /// sendmmsg: one system call for up to kMaxBatch frames.
+    BatchSendResult send_batch(const std::vector<CanFrame>& frames) override;
+    /// recvmmsg: one system call for everything queued (up to kMaxBatch), ppoll only when empty.
+    std::size_t receive_batch(std::vector<ReceiveResult>& out, std::size_t max_results, std::chrono::microseconds timeout) override;
     void set_filters(const std::vector<CanFilter>& filters) override;
     [[nodiscard]] const std::string& spec() const override { return spec_; }
     [[nodiscard]] const std::string& interface_name() const override { return iface_; }
     /// Receive buffer size the kernel granted, in bytes.
     [[nodiscard]] std::size_t receive_buffer_bytes() const { return rcvbuf_bytes_; }
 
+    /// Frames moved by one sendmmsg / recvmmsg call.
+    static constexpr std::size_t kMaxBatch = 64;
+
 private:
+    std::size_t to_kernel(const CanFrame& f, canfd_frame& cf) const;
+    ReceiveResult from_kernel(const canfd_frame& cf, std::size_t bytes, const msghdr& msg) const;
+    bool wait_readable(std::chrono::microseconds timeout) const;
     int fd_ = -1;
     std::string iface_;
     std::string spec_;

@@ -12,6 +12,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace emadiag::node {
 
@@ -31,6 +32,13 @@ struct EmaNodeFaults {
     double corrupt_crc_fraction = 0.0;  ///< probability that a telemetry frame carries a wrong CRC
     std::optional<double> silent_after_fraction;  ///< stop transmitting after this fraction of a sequence
     bool ack_without_ground_test = false;  ///< accept ENTER_GROUND_TEST but stay in NORMAL (a faulty mode switch)
+    std::uint32_t drop_burst_frames = 0;   ///< drop this many consecutive telemetry frames ...
+    double drop_burst_at_fraction = 0.5;   ///< ... starting at this fraction of the sequence
+    double duplicate_fraction = 0.0;       ///< probability that a telemetry frame is sent twice
+    double reorder_fraction = 0.0;         ///< probability that a telemetry frame is sent after the next one
+    /// The faults above act on the first this-many sequences only (0 = every sequence): a transient
+    /// disturbance, which a retry of the sequence gets past.
+    std::uint32_t fault_sequences = 0;
     std::uint64_t seed = 1;                       ///< seed of the fault draws (std::mt19937_64)
     void validate() const;
 };
@@ -50,7 +58,16 @@ struct EmaNodeStats {
     std::uint64_t telemetry_frames_sent = 0;
     std::uint64_t telemetry_frames_dropped = 0;
     std::uint64_t telemetry_crc_corrupted = 0;
+    std::uint64_t telemetry_frames_duplicated = 0;
+    std::uint64_t telemetry_frames_reordered = 0;
     std::uint64_t send_failures = 0;
+    std::uint64_t send_calls = 0;  ///< batched transmit calls (one sendmmsg on SocketCAN)
+};
+
+/// The gaps between TOOL_Heartbeat arrivals the EMA saw in GROUND_TEST (the watchdog's view).
+struct HeartbeatGapStats {
+    std::size_t count = 0;
+    double p50_ms = 0.0, p99_ms = 0.0, max_ms = 0.0;
 };
 
 class EmaNode {
@@ -65,6 +82,9 @@ public:
 
     [[nodiscard]] const can::EmaStatus& status() const { return status_; }
     [[nodiscard]] const EmaNodeStats& stats() const { return stats_; }
+    [[nodiscard]] HeartbeatGapStats heartbeat_gaps() const;
+    /// Time since a tool last sent anything (command or heartbeat); nullopt before the first.
+    [[nodiscard]] std::optional<std::chrono::steady_clock::duration> tool_idle() const;
     [[nodiscard]] bool silent() const { return silent_; }
 
     /// Called with a one-line description of each state change (the library never prints).
@@ -81,7 +101,10 @@ private:
     bool watchdog_expired();
     void finish(can::icd::SequenceState state, can::icd::FaultCode fault, const std::string& why);
     void send(const can::CanFrame& f);
+    /// Sends what is queued in tx_ in one batched call.
+    void flush_tx();
     void send_status();
+    [[nodiscard]] bool faults_active() const;
     void event(const std::string& what);
 
     can::CanBus& bus_;
@@ -92,6 +115,11 @@ private:
     std::mt19937_64 fault_rng_;
     Clock::time_point next_status_;
     Clock::time_point last_heartbeat_;
+    std::optional<Clock::time_point> last_heartbeat_arrival_;
+    std::optional<Clock::time_point> last_tool_frame_;
+    std::vector<double> heartbeat_gaps_ms_;
+    std::vector<can::CanFrame> tx_;
+    std::vector<can::ReceiveResult> rx_;
     bool silent_ = false;
 
     // The running sequence.

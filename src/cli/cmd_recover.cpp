@@ -1,0 +1,31 @@
+// emadiag recover --db FILE: stores the test sessions spooled beside the maintenance database
+// that were never stored (the tool was killed mid-run, the database was locked or the disk full).
+// The next `emadiag test-run` on the same database does the same before it starts.
+#include "cli/command.hpp"
+
+#include "diagnosis/session_spool.hpp"
+
+#include <iostream>
+#include <memory>
+
+namespace emadiag::cli {
+namespace {
+
+const bool registered = register_command(Command{
+    "recover", "Store the test sessions left in the spool beside the database (killed run, locked database, full disk)",
+    [](CLI::App& sub) -> std::function<int()> {
+        auto db = std::make_shared<std::string>("maintenance.db");
+        sub.add_option("--db", *db, "Maintenance database (SQLite); its spool is DB.spool/")->capture_default_str();
+        return [db] {
+            const auto dir = spool_dir_for(*db);
+            const auto recovered = recover_spooled_sessions(*db, [](const std::string& line) { std::cout << line << '\n' << std::flush; });
+            std::size_t stored = 0;
+            for (const auto& r : recovered) stored += r.db_session_id > 0 ? 1 : 0;
+            std::cout << "recover: " << stored << " spooled session(s) stored in " << *db << ", " << recovered.size() - stored
+                      << " found already stored; spool " << dir.string() << '\n';
+            return 0;
+        };
+    }});
+
+}  // namespace
+}  // namespace emadiag::cli

@@ -1,0 +1,234 @@
+#include "diagnosis/session_spool.hpp"
+
+#include "diagnosis/test_run.hpp"
+
+#include "can_tool/candump_run.hpp"
+#include "core/emadiag_error.hpp"
+#include "emadiag/db/database.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+namespace emadiag {
+namespace {
+
+constexpr const char* kManifestFormat = "emadiag-session-spool-1";
+
+std::string compact(const std::string& iso) {
+    std::string s;
+    for (char c : iso)
+        if (c != '-' && c != ':') s += c;
+    return s;
+}
+
+/// Writes `text` to `path` so that a crash leaves either the old file or the new one.
+void write_atomically(const std::filesystem::path& path, const std::string& text) {
+    const std::filesystem::path tmp = path.string() + ".tmp";
+    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd < 0) throw EmadiagError(tmp.string() + ": cannot write the session spool: " + std::strerror(errno));
+    std::size_t done = 0;
+    while (done < text.size()) {
+        const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) {
+            const int e = errno;
+            ::close(fd);
+            std::filesystem::remove(tmp);
+            throw EmadiagError(tmp.string() + ": cannot write the session spool: " + std::strerror(e));
+        }
+        done += static_cast<std::size_t>(n);
+    }
+    if (::fsync(fd) != 0 || ::close(fd) != 0) {
+        const int e = errno;
+        std::filesystem::remove(tmp);
+        throw EmadiagError(tmp.string() + ": cannot write the session spool: " + std::strerror(e));
+    }
+    std::error_code ec;
+    std::filesystem::rename(tmp, path, ec);
+    if (ec) throw EmadiagError(path.string() + ": cannot write the session spool: " + ec.message());
+    const int dfd = ::open(path.parent_path().c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (dfd >= 0) {
+        (void)::fsync(dfd);
+        ::close(dfd);
+    }
+}
+
+nlohmann::json to_json(const SessionManifest& m) {
+    nlohmann::json logs = nlohmann::json::array();
+    for (const auto& l : m.logs) logs.push_back({{"sequence", l.sequence}, {"attempt", l.attempt}, {"log_path", l.log_path}});
+    return {{"format", kManifestFormat}, {"tail_number", m.tail_number}, {"phase", m.phase}, {"started_utc", m.started_utc},
+            {"tool_version", m.tool_version}, {"limits_json", m.limits_json}, {"sequences", m.sequences},
+            {"logs", logs}, {"state", m.state}};
+}
+
+}  // namespace
+
+std::filesystem::path spool_dir_for(const std::string& db_path) { return std::filesystem::path(db_path + ".spool"); }
+
+SessionSpool::SessionSpool(const std::filesystem::path& dir, SessionManifest manifest) : manifest_(std::move(manifest)) {
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec) throw EmadiagError(dir.string() + ": cannot create the session spool directory: " + ec.message());
+    path_ = dir / (manifest_.tail_number + "_" + compact(manifest_.started_utc) + "_" + manifest_.phase + ".json");
+    write();
+}
+
+void SessionSpool::write() const { write_atomically(path_, to_json(manifest_).dump(2) + "\n"); }
+
+void SessionSpool::add_log(const SpooledLog& log) {
+    manifest_.logs.push_back(log);
+    write();
+}
+
+void SessionSpool::set_state(const std::string& state) {
+    manifest_.state = state;
+    write();
+}
+
+void SessionSpool::remove() {
+    std::error_code ec;
+    std::filesystem::remove(path_, ec);
+}
+
+SessionManifest read_session_manifest(const std::filesystem::path& path) {
+    std::ifstream in(path);
+    if (!in) throw EmadiagError(path.string() + ": cannot read the spooled session");
+    nlohmann::json j;
+    try {
+        j = nlohmann::json::parse(in);
+    } catch (const nlohmann::json::exception& e) {
+        throw EmadiagError(path.string() + ": not a session spool manifest: " + e.what());
+    }
+    auto text = [&](const char* key) -> std::string {
+        if (!j.contains(key) || !j[key].is_string()) throw EmadiagError(path.string() + ": field \"" + key + "\" missing or not a string");
+        return j[key].get<std::string>();
+    };
+    if (!j.is_object() || text("format") != kManifestFormat)
+        throw EmadiagError(path.string() + ": field \"format\" is not " + kManifestFormat);
+    SessionManifest m;
+    m.tail_number = text("tail_number");
+    m.phase = text("phase");
+    m.started_utc = text("started_utc");
+    m.tool_version = text("tool_version");
+    m.limits_json = text("limits_json");
+    m.state = text("state");
+    if (!j.contains("sequences") || !j["sequences"].is_array()) throw EmadiagError(path.string() + ": field \"sequences\" missing");
+    for (const auto& s : j["sequences"]) {
+        if (!s.is_string()) throw EmadiagError(path.string() + ": field \"sequences\" holds a non-string");
+        m.sequences.push_back(s.get<std::string>());
+    }
+    if (!j.contains("logs") || !j["logs"].is_array()) throw EmadiagError(path.string() + ": field \"logs\" missing");
+    for (std::size_t i = 0; i < j["logs"].size(); ++i) {
+        const auto& l = j["logs"][i];
+        const std::string where = path.string() + ": logs[" + std::to_string(i) + "]";
+        if (!l.is_object() || !l.contains("sequence") || !l["sequence"].is_string() || !l.contains("log_path") ||
+            !l["log_path"].is_string() || !l.contains("attempt") || !l["attempt"].is_number_integer())
+            throw EmadiagError(where + ": needs sequence, attempt and log_path");
+        m.logs.push_back(SpooledLog{l["sequence"].get<std::string>(), l["attempt"].get<int>(), l["log_path"].get<std::string>()});
+    }
+    return m;
+}
+
+std::vector<RecoveredSession> recover_spooled_sessions(const std::string& db_path, const std::function<void(const std::string&)>& on_progress) {
+    auto say = [&](const std::string& s) {
+        if (on_progress) on_progress(s);
+    };
+    std::vector<RecoveredSession> out;
+    const std::filesystem::path dir = spool_dir_for(db_path);
+    std::error_code ec;
+    if (!std::filesystem::is_directory(dir, ec)) return out;
+    std::vector<std::filesystem::path> manifests;
+    for (const auto& e : std::filesystem::directory_iterator(dir, ec))
+        if (e.path().extension() == ".json") manifests.push_back(e.path());
+    std::sort(manifests.begin(), manifests.end());
+    if (manifests.empty()) return out;
+    db::Database database(db_path);
+    for (const auto& path : manifests) {
+        SessionManifest m;
+        try {
+            m = read_session_manifest(path);
+        } catch (const EmadiagError& e) {
+            say(std::string("spool: left in place: ") + e.what());
+            continue;
+        }
+        RecoveredSession rs;
+        rs.manifest = path;
+        // Stored already (the tool stopped between storing and removing the manifest)?
+        {
+            db::Statement q(database, "SELECT session_id FROM test_sessions WHERE tail_number = ?1 AND phase = ?2 AND started_utc = ?3");
+            q.bind(1, m.tail_number).bind(2, m.phase).bind(3, m.started_utc);
+            if (q.step()) {
+                rs.note = "already stored as test session " + std::to_string(q.column_int(0));
+                std::filesystem::remove(path, ec);
+                say("spool: " + path.filename().string() + ": " + rs.note + "; manifest removed");
+                out.push_back(rs);
+                continue;
+            }
+        }
+        std::vector<TestRunRecord> runs;
+        std::vector<std::string> unreadable;
+        for (const auto& l : m.logs) {
+            TestRunRecord rec;
+            rec.sequence = l.sequence;
+            rec.attempt = l.attempt;
+            rec.log_path = l.log_path;
+            try {
+                rec.outcome.run = read_run_candump(l.log_path);
+            } catch (const std::exception& e) {
+                // A log cut before the EMA identified itself holds no run; it is named, not stored.
+                unreadable.push_back(l.sequence + " (" + l.log_path + "): " + e.what());
+                continue;
+            }
+            rec.outcome.run.set_meta("tail_number", m.tail_number);
+            rec.outcome.run.set_meta("phase", m.phase);
+            rec.outcome.run.set_meta("recovered_from_spool", path.filename().string());
+            rec.outcome.status = rec.outcome.run.meta_value("status").value_or("incomplete");
+            rec.outcome.valid = rec.outcome.run.meta_value("valid").value_or("false") == "true";
+            rec.outcome.invalid_reason = rec.outcome.run.meta_value("invalid_reason").value_or("");
+            if (rec.outcome.valid) session_parts::estimate(rec);
+            runs.push_back(std::move(rec));
+        }
+        HealthLimits limits = HealthLimits::datasheet_envelope();
+        try {
+            limits = HealthLimits::from_json(nlohmann::json::parse(m.limits_json), path.string() + ": limits_json");
+        } catch (const std::exception& e) {
+            say(std::string("spool: ") + e.what() + "; judged against the datasheet envelope");
+        }
+        Assessment a;
+        if (m.state == "recorded") {
+            a = session_parts::assess_records(runs, limits);
+        } else {
+            a.findings = session_parts::assess_records(runs, limits).findings;
+            a.verdict = Verdict::NoTest;
+            a.reason = "recovered from the spool: the tool stopped mid-session (while recording " +
+                       (m.logs.empty() ? std::string("nothing") : m.logs.back().sequence) + ")";
+        }
+        if (!unreadable.empty()) {
+            a.reason += "; raw log without a run:";
+            for (const auto& u : unreadable) a.reason += " " + u;
+        }
+        if (runs.empty()) {
+            say("spool: " + path.filename().string() + ": no run could be decoded (" + a.reason + "); left in place");
+            continue;
+        }
+        const db::StoredTestSession s = session_parts::to_stored_session(m, runs, a);
+        rs.db_session_id = db::store_test_session(database, s);
+        rs.verdict = to_string(a.verdict);
+        rs.note = a.reason;
+        std::filesystem::remove(path, ec);
+        say("recovered spooled session " + path.filename().string() + ": stored as test session " + std::to_string(rs.db_session_id) +
+            " of " + m.tail_number + ", verdict " + rs.verdict + " (" + a.reason + ")");
+        out.push_back(rs);
+    }
+    return out;
+}
+
+}  // namespace emadiag

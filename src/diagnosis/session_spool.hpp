@@ -1,0 +1,73 @@
+#pragma once
+// The spool of a test session not yet stored: a manifest beside the maintenance database
+// (DB.spool/<tail>_<utc>_<phase>.json) that names the session and its raw bus logs. test-run
+// writes it before the first command and rewrites it before each sequence, so a tool killed
+// outright (kill -9, a flat battery), a locked database or a full disk leaves the raw logs and
+// their meaning on disk. recover_spooled_sessions() (run by the next test-run and by
+// `emadiag recover`) decodes the logs again, estimates and assesses them with the same code as
+// the live run, stores the session in one transaction and only then deletes the manifest.
+#include "diagnosis/health_limits.hpp"
+
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace emadiag {
+
+struct SpooledLog {
+    std::string sequence;   ///< "dyn" or "brk"
+    int attempt = 1;        ///< 2 for the automatic retry after a transient loss
+    std::string log_path;   ///< the raw candump log
+};
+
+struct SessionManifest {
+    std::string tail_number;
+    std::string phase;
+    std::string started_utc;
+    std::string tool_version;
+    std::string limits_json = "{}";
+    std::vector<std::string> sequences;  ///< the routine commanded, in order
+    std::vector<SpooledLog> logs;        ///< every log started, in order
+    /// "recording" while sequences run; "recorded" once the routine ended and only storing is left.
+    std::string state = "recording";
+};
+
+/// DB.spool next to the database file.
+[[nodiscard]] std::filesystem::path spool_dir_for(const std::string& db_path);
+
+/// One session's manifest file. Every write is atomic (temporary file, fsync, rename).
+class SessionSpool {
+public:
+    /// Creates the spool directory if needed and writes the manifest. Throws EmadiagError naming the
+    /// file when it cannot be written (the test must not start unstorable).
+    SessionSpool(const std::filesystem::path& dir, SessionManifest manifest);
+    void add_log(const SpooledLog& log);
+    void set_state(const std::string& state);
+    /// The session is stored: the manifest goes (the raw logs stay where they were written).
+    void remove();
+    [[nodiscard]] const std::filesystem::path& path() const { return path_; }
+    [[nodiscard]] const SessionManifest& manifest() const { return manifest_; }
+
+private:
+    void write() const;
+    std::filesystem::path path_;
+    SessionManifest manifest_;
+};
+
+/// Reads a manifest; throws EmadiagError naming the file and the field.
+[[nodiscard]] SessionManifest read_session_manifest(const std::filesystem::path& path);
+
+struct RecoveredSession {
+    std::filesystem::path manifest;
+    std::int64_t db_session_id = 0;   ///< 0 when it was found already stored
+    std::string verdict;
+    std::string note;
+};
+
+/// Stores every spooled session of `db_path` (oldest first). A session already in the database
+/// (same tail, phase and start time) is not stored twice: its manifest is just removed. A manifest
+/// that cannot be read is left in place and reported through `on_progress`, never deleted.
+std::vector<RecoveredSession> recover_spooled_sessions(const std::string& db_path, const std::function<void(const std::string&)>& on_progress);
+
+}  // namespace emadiag
