@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -69,6 +70,23 @@ nlohmann::json to_json(const SessionManifest& m) {
             {"logs", logs}, {"state", m.state}};
 }
 
+std::filesystem::path lock_path_for(const std::filesystem::path& manifest) {
+    std::filesystem::path p = manifest;
+    p.replace_extension(".lock");
+    return p;
+}
+
+/// Opens (creating) and locks `path` without waiting; -1 when another process holds it.
+int try_lock(const std::filesystem::path& path) {
+    const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd < 0) throw EmadiagError(path.string() + ": cannot open the session spool lock: " + std::strerror(errno));
+    if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+        ::close(fd);
+        return -1;
+    }
+    return fd;
+}
+
 }  // namespace
 
 std::filesystem::path spool_dir_for(const std::string& db_path) { return std::filesystem::path(db_path + ".spool"); }
@@ -78,7 +96,13 @@ SessionSpool::SessionSpool(const std::filesystem::path& dir, SessionManifest man
     std::filesystem::create_directories(dir, ec);
     if (ec) throw EmadiagError(dir.string() + ": cannot create the session spool directory: " + ec.message());
     path_ = dir / (manifest_.tail_number + "_" + compact(manifest_.started_utc) + "_" + manifest_.phase + ".json");
+    lock_fd_ = try_lock(lock_path_for(path_));
+    if (lock_fd_ < 0) throw EmadiagError(path_.string() + ": another emadiag process is recording this session");
     write();
+}
+
+SessionSpool::~SessionSpool() {
+    if (lock_fd_ >= 0) ::close(lock_fd_);
 }
 
 void SessionSpool::write() const { write_atomically(path_, to_json(manifest_).dump(2) + "\n"); }
@@ -96,6 +120,7 @@ void SessionSpool::set_state(const std::string& state) {
 void SessionSpool::remove() {
     std::error_code ec;
     std::filesystem::remove(path_, ec);
+    std::filesystem::remove(lock_path_for(path_), ec);
 }
 
 SessionManifest read_session_manifest(const std::filesystem::path& path) {
@@ -159,6 +184,13 @@ std::vector<RecoveredSession> recover_spooled_sessions(const std::string& db_pat
             say(std::string("spool: left in place: ") + e.what());
             continue;
         }
+        // A session still being recorded by a live tool holds its lock: not ours to store.
+        const int lock_fd = try_lock(lock_path_for(path));
+        if (lock_fd < 0) continue;
+        struct Unlock {
+            int fd;
+            ~Unlock() { ::close(fd); }
+        } unlock{lock_fd};
         RecoveredSession rs;
         rs.manifest = path;
         // Stored already (the tool stopped between storing and removing the manifest)?
@@ -168,6 +200,7 @@ std::vector<RecoveredSession> recover_spooled_sessions(const std::string& db_pat
             if (q.step()) {
                 rs.note = "already stored as test session " + std::to_string(q.column_int(0));
                 std::filesystem::remove(path, ec);
+                std::filesystem::remove(lock_path_for(path), ec);
                 say("spool: " + path.filename().string() + ": " + rs.note + "; manifest removed");
                 out.push_back(rs);
                 continue;
@@ -224,6 +257,7 @@ std::vector<RecoveredSession> recover_spooled_sessions(const std::string& db_pat
         rs.verdict = to_string(a.verdict);
         rs.note = a.reason;
         std::filesystem::remove(path, ec);
+        std::filesystem::remove(lock_path_for(path), ec);
         say("recovered spooled session " + path.filename().string() + ": stored as test session " + std::to_string(rs.db_session_id) +
             " of " + m.tail_number + ", verdict " + rs.verdict + " (" + a.reason + ")");
         out.push_back(rs);

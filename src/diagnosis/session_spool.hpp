@@ -36,7 +36,10 @@ struct SessionManifest {
 /// DB.spool next to the database file.
 [[nodiscard]] std::filesystem::path spool_dir_for(const std::string& db_path);
 
-/// One session's manifest file. Every write is atomic (temporary file, fsync, rename).
+/// One session's manifest file. Every write is atomic (temporary file, fsync, rename). While the
+/// SessionSpool lives, it holds an exclusive lock (flock) on NAME.lock beside the manifest: the
+/// recovery of another process skips a session that is still being recorded; the kernel releases
+/// the lock when the process dies, however it dies.
 class SessionSpool {
 public:
     /// Creates the spool directory if needed and writes the manifest. Throws EmadiagError naming the
@@ -46,12 +49,16 @@ public:
     void set_state(const std::string& state);
     /// The session is stored: the manifest goes (the raw logs stay where they were written).
     void remove();
+    ~SessionSpool();
+    SessionSpool(const SessionSpool&) = delete;
+    SessionSpool& operator=(const SessionSpool&) = delete;
     [[nodiscard]] const std::filesystem::path& path() const { return path_; }
     [[nodiscard]] const SessionManifest& manifest() const { return manifest_; }
 
 private:
     void write() const;
     std::filesystem::path path_;
+    int lock_fd_ = -1;
     SessionManifest manifest_;
 };
 
@@ -66,8 +73,9 @@ struct RecoveredSession {
 };
 
 /// Stores every spooled session of `db_path` (oldest first). A session already in the database
-/// (same tail, phase and start time) is not stored twice: its manifest is just removed. A manifest
-/// that cannot be read is left in place and reported through `on_progress`, never deleted.
+/// (same tail, phase and start time) is not stored twice: its manifest is just removed. A session
+/// whose tool is still running (its lock is held) is left alone. A manifest that cannot be read is
+/// left in place and reported through `on_progress`, never deleted.
 std::vector<RecoveredSession> recover_spooled_sessions(const std::string& db_path, const std::function<void(const std::string&)>& on_progress);
 
 }  // namespace emadiag

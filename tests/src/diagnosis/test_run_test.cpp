@@ -256,8 +256,14 @@ TEST_F(TestRun, SpooledSessionOfAKilledToolIsRecoveredOnceNeverTwice) {
     m.tool_version = "test";
     m.limits_json = HealthLimits::datasheet_envelope().to_json().dump();
     m.sequences = {"dyn", "brk"};
-    SessionSpool spool(spool_dir_for(o.db_path), m);
-    spool.add_log(SpooledLog{"dyn", 1, log_path});
+    std::filesystem::path manifest;
+    {
+        SessionSpool spool(spool_dir_for(o.db_path), m);
+        spool.add_log(SpooledLog{"dyn", 1, log_path});
+        manifest = spool.path();
+        // While the tool lives, its lock keeps every other recovery away from the session.
+        EXPECT_TRUE(recover_spooled_sessions(o.db_path, nullptr).empty());
+    }  // the tool dies: the kernel releases its lock; the manifest stays
     // A manifest that cannot be read is reported and left in place, never deleted.
     const auto bad = spool_dir_for(o.db_path) / "N999EM_bad.json";
     std::ofstream(bad) << "{ not json";
@@ -268,7 +274,7 @@ TEST_F(TestRun, SpooledSessionOfAKilledToolIsRecoveredOnceNeverTwice) {
     EXPECT_GT(first[0].db_session_id, 0);
     EXPECT_EQ(first[0].verdict, "NO_TEST");
     EXPECT_THAT(first[0].note, HasSubstr("the tool stopped mid-session (while recording dyn)"));
-    EXPECT_FALSE(std::filesystem::exists(spool.path()));
+    EXPECT_FALSE(std::filesystem::exists(manifest));
     EXPECT_TRUE(std::filesystem::exists(bad));
     bool reported = false;
     for (const auto& l : said) reported = reported || l.find("N999EM_bad.json") != std::string::npos;
@@ -283,8 +289,10 @@ TEST_F(TestRun, SpooledSessionOfAKilledToolIsRecoveredOnceNeverTwice) {
         EXPECT_EQ(s.started_utc, "2026-11-24T10:00:00Z");
     }
     // The tool died after storing but before removing the manifest: not stored twice.
-    SessionSpool again(spool_dir_for(o.db_path), m);
-    again.add_log(SpooledLog{"dyn", 1, log_path});
+    {
+        SessionSpool again(spool_dir_for(o.db_path), m);
+        again.add_log(SpooledLog{"dyn", 1, log_path});
+    }
     const auto second = recover_spooled_sessions(o.db_path, nullptr);
     ASSERT_EQ(second.size(), 1u);
     EXPECT_EQ(second[0].db_session_id, 0);
