@@ -27,7 +27,7 @@ if [ "${1:-}" = "--inner" ]; then
             echo "rc $?" >> "$d/time.txt"
             wait "$ema"
             frames=$(cat "$d"/logs/*.log 2>/dev/null | wc -l)
-            read -r wall user sys < <(head -1 "$d/time.txt")
+            read -r wall user sys < "$d/time.txt"
             gaps=$(grep -o "heartbeat gaps seen in GROUND_TEST: .*" "$d/ema.out" | head -1)
             verdict=$(grep -o "VERDICT: [A-Z_]*" "$d/tool.out" | head -1)
             lost=$(grep -c "heartbeat lost" "$d/ema.out")
