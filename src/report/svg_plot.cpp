@@ -29,6 +29,9 @@ constexpr double kErrorCapHalfWidth = 3;
 constexpr double kMaxDateDays = 1e7;
 constexpr double kDaysPerMonth = 30.436875;
 constexpr double kDaysPerYear = 365.2425;
+constexpr double kMinutesPerDay = 1440.0;
+/// Spans shorter than this get ticks at times of day ("2026-03-06 12:00").
+constexpr double kMinDateTickSpanDays = 3.0;
 
 /// A coordinate with two decimals; "-0.00" is written "0.00" so the output does not depend on the sign of zero.
 std::string fmt(double v) {
@@ -219,6 +222,29 @@ std::vector<DateTick> date_ticks(double lo, double hi, int target) {
     if (target < 2) throw EmadiagError("date_ticks: target " + std::to_string(target) + " must be at least 2");
     const double wanted_step = (hi - lo) / (target - 1);
     std::vector<DateTick> ticks;
+    if (hi - lo < kMinDateTickSpanDays) {
+        // Less than a few days: times of day, every 1, 2, 5, 10, 15 or 30 minutes or 1, 2, 3, 6, 12 or 24 hours.
+        long long step_min = 1440;
+        for (const long long m : {1LL, 2LL, 5LL, 10LL, 15LL, 30LL, 60LL, 120LL, 180LL, 360LL, 720LL, 1440LL}) {
+            if (static_cast<double>(m) >= wanted_step * kMinutesPerDay) {
+                step_min = m;
+                break;
+            }
+        }
+        const auto first = static_cast<long long>(std::ceil(lo * kMinutesPerDay / static_cast<double>(step_min) - 1e-9));
+        for (long long k = first;; ++k) {
+            const long long minutes = k * step_min;  // since 1970-01-01T00:00
+            const double days = static_cast<double>(minutes) / kMinutesPerDay;
+            if (days > hi + 1e-12) break;
+            const long long per_day = static_cast<long long>(kMinutesPerDay);
+            const std::int64_t day = minutes >= 0 ? minutes / per_day : -((-minutes + per_day - 1) / per_day);
+            const long long minute = minutes - day * per_day;
+            char hm[48];
+            std::snprintf(hm, sizeof hm, " %02lld:%02lld", minute / 60, minute % 60);
+            ticks.push_back({days, date_label(day, 3) + hm});
+        }
+        return ticks;
+    }
     const auto first_day = static_cast<std::int64_t>(std::ceil(lo));
     const auto last_day = static_cast<std::int64_t>(std::floor(hi));
     if (wanted_step < 0.5 * kDaysPerMonth) {

@@ -125,11 +125,11 @@ private:
 /// A tick value as text with the decimals `step` needs ("0.085", "120", "2.5e-07").
 [[nodiscard]] std::string format_tick(double value, double step);
 
-/// Date ticks between lo and hi (days since 1970): whole days, or month starts every 1, 2, 3 or 6
-/// months, or year starts, whichever gives about `target` ticks.
+/// Date ticks between lo and hi (days since 1970): times of day (spans under 3 days), whole days, month
+/// starts every 1, 2, 3 or 6 months, or year starts, whichever gives about `target` ticks.
 struct DateTick {
     double days = 0;
-    std::string label;  ///< "2026-03-06", "2026-03" or "2026"
+    std::string label;  ///< "2026-03-06 12:00", "2026-03-06", "2026-03" or "2026"
 };
 [[nodiscard]] std::vector<DateTick> date_ticks(double lo, double hi, int target = kTargetTicks);
 
