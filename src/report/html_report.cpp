@@ -20,7 +20,7 @@ constexpr const char* kCrossingColor = "#8e44ad";
 constexpr const char* kLastSessionColor = "#555555";
 
 /// The browser loads nothing and runs nothing: only the inline style is allowed.
-constexpr const char* kContentSecurityPolicy = "default-src 'none'; style-src 'unsafe-inline'; img-src data:";
+constexpr const char* kContentSecurityPolicy = "default-src 'none'; style-src 'unsafe-inline'";
 
 constexpr const char* kStyle = R"(
 body { font-family: sans-serif; font-size: 14px; color: #222; margin: 16px 24px; max-width: 1240px; }
