@@ -190,7 +190,7 @@ int main(int argc, char** argv) {
     }
 
     std::printf("\nProgPy metrics (prognostics_metrics.hpp): %d histories per row, %d sessions %g days apart (day 0 to %g), true end of\n"
-                "life day %g; a prediction after every session from the %dth (day %g, t_P) on, each with its %d Monte Carlo draws.\n"
+                "life day %g; a prediction after every session from session %d (day %g, t_P) on, each with its %d Monte Carlo draws.\n"
                 "alpha-lambda: alpha %g, lambda %g (t_lambda = t_P + lambda (EoL - t_P) = day %g; the prediction at or after it, ProgPy's\n"
                 "rule), met when a fraction beta = %g of the draws lies within +/-alpha of the true RUL. RA = 1 - |r* - r| / r* of the\n"
                 "point RUL at that prediction. PH = EoL - t of the first prediction meeting the same alpha/beta criterion (0 when none).\n\n",
