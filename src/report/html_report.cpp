@@ -106,6 +106,25 @@ void check_parameter(const ReportParameter& p, const std::string& where) {
         check_number(p.points[i].std_error, at + " points[" + std::to_string(i) + "].std_error");
     }
     if (p.crossing_x) check_number(*p.crossing_x, at + " crossing_x");
+    if (p.fit) {
+        const ReportCurve& c = *p.fit;
+        if (c.mean.size() != c.x.size() || c.lower.size() != c.x.size() || c.upper.size() != c.x.size()) {
+            throw EmadiagError("report: " + at + " fit has " + std::to_string(c.x.size()) + " x, " + std::to_string(c.mean.size()) + " mean, " +
+                               std::to_string(c.lower.size()) + " lower and " + std::to_string(c.upper.size()) + " upper values");
+        }
+        for (std::size_t i = 0; i < c.x.size(); ++i) {
+            const std::string fi = at + " fit[" + std::to_string(i) + "]";
+            check_number(c.x[i], fi + ".x");
+            check_number(c.mean[i], fi + ".mean");
+            check_number(c.lower[i], fi + ".lower");
+            check_number(c.upper[i], fi + ".upper");
+            if (!(c.lower[i] <= c.mean[i] && c.mean[i] <= c.upper[i])) {
+                std::ostringstream os;
+                os << "report: " << fi << ": the band [" << c.lower[i] << ", " << c.upper[i] << "] does not hold the mean " << c.mean[i];
+                throw EmadiagError(os.str());
+            }
+        }
+    }
 }
 
 std::string table_row(const std::vector<std::string>& cells, const std::vector<bool>& numeric = {}) {

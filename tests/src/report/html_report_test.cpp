@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <regex>
 
 namespace emadiag::report {
@@ -186,6 +187,19 @@ TEST(HtmlReport, BadNumberNamesSectionParameterAndPoint) {
     d.positions[0].parameters[0].points[3].std_error = std::nan("");
     EXPECT_THAT([&] { (void)render_html(d); },
                 ThrowsMessage<EmadiagError>(HasSubstr("position \"ALL\" parameter \"FDJ_Nm\" points[3].std_error = nan is not a finite number")));
+}
+
+TEST(HtmlReport, BadFitIsNamed) {
+    ReportDocument d = adapted();
+    d.positions[0].parameters[0].fit->upper[5] = std::numeric_limits<double>::infinity();
+    EXPECT_THAT([&] { (void)render_html(d); },
+                ThrowsMessage<EmadiagError>(HasSubstr("position \"ALL\" parameter \"FDJ_Nm\" fit[5].upper = inf is not a finite number")));
+    d = adapted();
+    d.positions[0].parameters[0].fit->lower[7] = 1.0;
+    EXPECT_THAT([&] { (void)render_html(d); }, ThrowsMessage<EmadiagError>(HasSubstr("fit[7]: the band [1, ")));
+    d = adapted();
+    d.positions[0].parameters[0].fit->mean.pop_back();
+    EXPECT_THAT([&] { (void)render_html(d); }, ThrowsMessage<EmadiagError>(HasSubstr("fit has 80 x, 79 mean")));
 }
 
 TEST(HtmlReport, CyclesAxisAndRulInTwoUnits) {
