@@ -39,6 +39,7 @@ browser() {
   profile="$(mktemp -d "$out/profile.XXXXXX")"
   local args=(--headless --disable-gpu --no-sandbox --no-first-run --no-default-browser-check
               --disable-extensions --disable-background-networking --disable-component-update --disable-sync
+              --disable-dev-shm-usage
               --hide-scrollbars --user-data-dir="$profile" --enable-logging=stderr --v=0
               --window-size="$window")
   local rc=0
