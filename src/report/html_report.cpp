@@ -290,9 +290,13 @@ SvgPlot trend_plot(const ReportParameter& p, TimeAxis axis, const std::string& i
     // The crossing is marked when it lies within what is drawn (a crossing far beyond the projected fit
     // would squeeze the data into a corner; the table gives its date).
     double x_lo = std::numeric_limits<double>::infinity(), x_hi = -x_lo;
-    for (const auto& pt : p.points) x_lo = std::min(x_lo, pt.x), x_hi = std::max(x_hi, pt.x);
+    const auto extend = [&](double x) {
+        x_lo = std::min(x_lo, x);
+        x_hi = std::max(x_hi, x);
+    };
+    for (const auto& pt : p.points) extend(pt.x);
     if (p.fit)
-        for (const double x : p.fit->x) x_lo = std::min(x_lo, x), x_hi = std::max(x_hi, x);
+        for (const double x : p.fit->x) extend(x);
     if (x_range) {
         x_lo = x_range->first;
         x_hi = x_range->second;
