@@ -1,15 +1,23 @@
 // emadiag trend --db FILE --tail N123EM [--phase pre-flight|post-flight|all] [--horizon-days 3650]
-//   [--draws 4000] [--seed S] [--json]:
+//   [--draws 4000] [--seed S] [--json | --format text|json|html] [--out FILE]:
 // the reliability engineer's trend report of one aircraft from its stored test sessions
 // (prognostics/trend_report.hpp): per health parameter the measurements, the degradation model,
 // the predicted limit crossing and the remaining useful life with its 90 % interval. Text for
-// people; --json is the stable schema of docs/trend-report.md.
+// people; --json is the stable schema of docs/trend-report.md; html is one self-contained file with
+// the plots (report/html_report.hpp, docs/report-html.md).
 #include "cli/command.hpp"
 
+#include "core/emadiag_error.hpp"
 #include "emadiag/db/database.hpp"
 #include "estimation/health_estimate.hpp"
 #include "prognostics/trend_report.hpp"
 #include "prognostics/utc_time.hpp"
+#include "report/html_report.hpp"
+#include "report/trend_adapter.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
 
 #include <cmath>
 #include <iomanip>
@@ -30,7 +38,34 @@ struct TrendCliOptions {
     int draws = pg::kDefaultMonteCarloDraws;
     std::uint64_t seed = 1;
     bool json = false;
+    std::string format = "text";
+    std::string out;
 };
+
+/// Writes `text` to `path` through a temporary file renamed into place, so that a failed write
+/// never leaves a half-written report.
+void write_file(const std::string& path, const std::string& text) {
+    const std::string tmp = path + ".tmp";
+    {
+        std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+        if (!f) throw EmadiagError("cannot open " + tmp + " for writing");
+        f << text;
+        f.close();
+        if (!f) {
+            std::remove(tmp.c_str());
+            throw EmadiagError("cannot write " + tmp + " (disk full?)");
+        }
+    }
+    if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+        std::remove(tmp.c_str());
+        throw EmadiagError("cannot rename " + tmp + " to " + path);
+    }
+}
+
+std::string now_utc() {
+    const auto s = std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+    return pg::format_utc_time(static_cast<double>(s) / pg::kSecondsPerDay);
+}
 
 std::string num(double v, int digits = 4) {
     std::ostringstream os;
@@ -151,7 +186,11 @@ const bool registered = register_command(Command{
         sub.add_option("--horizon-days", o->horizon_days, "How far after the last session a crossing is predicted, days")->capture_default_str();
         sub.add_option("--draws", o->draws, "Monte Carlo draws for the RUL interval")->capture_default_str();
         sub.add_option("--seed", o->seed, "Seed of the Monte Carlo draws (recorded in the report)")->capture_default_str();
-        sub.add_flag("--json", o->json, "JSON report (docs/trend-report.md)");
+        sub.add_flag("--json", o->json, "JSON report (docs/trend-report.md); the same as --format json");
+        sub.add_option("--format", o->format, "text, json (docs/trend-report.md) or html (one self-contained file, docs/report-html.md)")
+            ->capture_default_str()
+            ->check(CLI::IsMember({"text", "json", "html"}));
+        sub.add_option("--out", o->out, "Write the report to this file (default: standard output)");
         return [o] {
             pg::TrendOptions t;
             t.phase = o->phase;
@@ -160,10 +199,22 @@ const bool registered = register_command(Command{
             t.rul.seed = o->seed;
             db::Database database(o->db);
             const pg::TrendReport report = pg::load_trend_report(database, o->tail, t);
-            if (o->json) {
-                std::cout << pg::to_json(report).dump(2) << '\n';
+            const std::string format = o->json ? "json" : o->format;
+            std::ostringstream text;
+            if (format == "json") {
+                text << pg::to_json(report).dump(2) << '\n';
+            } else if (format == "html") {
+                const report::ReportDocument doc = report::from_trend_report(
+                    report, db::list_test_sessions(database, o->tail), {now_utc(), EMADIAG_VERSION, o->db});
+                text << report::render_html(doc);
             } else {
-                print_text(std::cout, report);
+                print_text(text, report);
+            }
+            if (o->out.empty()) {
+                std::cout << text.str();
+            } else {
+                write_file(o->out, text.str());
+                std::cerr << "wrote the " << format << " report of " << o->tail << " to " << o->out << " (" << text.str().size() << " bytes)\n";
             }
             return 0;
         };
