@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cctype>
 #include <cmath>
 #include <random>
@@ -163,7 +164,36 @@ std::string batch_mismatch(const SimConfig& a, const SimConfig& b) {
 
 }  // namespace
 
+namespace {
+std::atomic<std::uint64_t> g_scalar_runs{0}, g_batch_runs{0};
+std::atomic<std::int64_t> g_scalar_ns{0}, g_batch_ns{0};
+
+/// Adds the wall time of a call to a counter when it ends (also when it throws).
+class CallTimer {
+public:
+    explicit CallTimer(std::atomic<std::int64_t>& ns) : ns_(ns), t0_(std::chrono::steady_clock::now()) {}
+    ~CallTimer() { ns_ += std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0_).count(); }
+    CallTimer(const CallTimer&) = delete;
+    CallTimer& operator=(const CallTimer&) = delete;
+
+private:
+    std::atomic<std::int64_t>& ns_;
+    std::chrono::steady_clock::time_point t0_;
+};
+}  // namespace
+
+SimCounters sim_counters() {
+    SimCounters c;
+    c.scalar_runs = g_scalar_runs;
+    c.scalar_s = static_cast<double>(g_scalar_ns) * 1e-9;
+    c.batch_runs = g_batch_runs;
+    c.batch_s = static_cast<double>(g_batch_ns) * 1e-9;
+    return c;
+}
+
 SimResult simulate(const SimConfig& config) {
+    const CallTimer timer(g_scalar_ns);
+    ++g_scalar_runs;
     SimResult result;
     const SimConfig* cfg[1] = {&config};
     SimResult* out[1] = {&result};
@@ -172,6 +202,8 @@ SimResult simulate(const SimConfig& config) {
 }
 
 std::vector<SimResult> simulate_batch(const std::vector<SimConfig>& configs, unsigned threads) {
+    const CallTimer timer(g_batch_ns);
+    g_batch_runs += configs.size();
     std::vector<SimResult> results(configs.size());
     if (configs.empty()) return results;
     for (std::size_t i = 1; i < configs.size(); ++i) {

@@ -132,6 +132,16 @@ inline constexpr const char* kSimdEnvVar = "EMADIAG_SIMD";
 /// Throws SimError naming the value and the supported ones. Process-wide; call it while no batch runs.
 void set_simd_target(const std::string& name);
 
+/// What this process has simulated so far (simulate and simulate_batch), for time breakdowns: runs,
+/// and the wall time spent in the calls, summed over the calling threads.
+struct SimCounters {
+    std::uint64_t scalar_runs = 0;   ///< simulate calls
+    double scalar_s = 0;
+    std::uint64_t batch_runs = 0;    ///< simulations run through simulate_batch
+    double batch_s = 0;
+};
+[[nodiscard]] SimCounters sim_counters();
+
 /// Adds the noise profile to samples in place (seeded; Gaussian on top of std::mt19937_64),
 /// then quantises to the sensor resolutions. NoiseProfile::None leaves the samples untouched.
 void apply_noise(std::vector<Sample>& samples, NoiseProfile profile, std::uint64_t seed);
