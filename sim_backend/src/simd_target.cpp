@@ -19,11 +19,12 @@ namespace {
 
 struct NamedTarget {
     const char* name;
-    std::int64_t bits;  // Highway target bit
+    std::int64_t bits;  // Highway target bits
 };
 // Narrowest first. Highway orders targets the other way: a lower bit is a better target.
+// AVX3_DL (AVX-512 with VNNI, VBMI2, ...) only exists in EMADIAG_NATIVE builds on such CPUs.
 #if HWY_ARCH_X86
-constexpr NamedTarget kTargets[] = {{"sse4", HWY_SSE4}, {"avx2", HWY_AVX2}, {"avx512", HWY_AVX3}};
+constexpr NamedTarget kTargets[] = {{"sse4", HWY_SSE4}, {"avx2", HWY_AVX2}, {"avx512", HWY_AVX3 | HWY_AVX3_DL}};
 #elif HWY_ARCH_ARM
 constexpr NamedTarget kTargets[] = {{"neon", HWY_NEON}};
 #else
@@ -71,7 +72,8 @@ void apply(const std::string& name, const char* source) {
             throw SimError(std::string(source) + " '" + name + "' is not supported by this CPU; supported: " +
                            supported_list());
         }
-        hwy::DisableTargets(t.bits - 1);  // every better target
+        const std::int64_t best_bit = t.bits & -t.bits;
+        hwy::DisableTargets(best_bit - 1);  // every better target
         g_scalar = false;
         return;
     }
@@ -91,7 +93,9 @@ void ensure_initialised() {
 
 std::string our_name(const char* highway_name) {
     for (const auto& t : kTargets) {
-        if (hwy::TargetName(t.bits) == std::string(highway_name)) return t.name;
+        for (std::int64_t bits = t.bits; bits != 0; bits &= bits - 1) {
+            if (hwy::TargetName(bits & -bits) == std::string(highway_name)) return t.name;
+        }
     }
     return lower(highway_name);
 }
