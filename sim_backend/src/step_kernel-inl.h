@@ -284,7 +284,8 @@ inline void run_lanes(const detail::Shared& shared, Lanes<W>* z, SimResult* cons
         const double cmd = detail::command_deg_inline(s.sequence, t);
         for (int g = 0; g < G; ++g) {
             Lanes<W>& zg = z[g];
-            double sum_i[W], sum_w[W], th[W], sum_h[W], sum_tf[W], sum_tm[W], sum_fr[W], stuck[W];
+            double sum_i[W], sum_w[W], th[W], sum_h[W];
+            double sum_tf[W]{}, sum_tm[W]{}, sum_fr[W]{}, stuck[W]{};  // filled when record_truth
             to_array(zg.sum_i, sum_i);
             to_array(zg.sum_w, sum_w);
             to_array(zg.th, th);
