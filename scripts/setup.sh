@@ -7,6 +7,7 @@ PACKAGES=(
   g++ cmake ninja-build pkg-config
   libeigen3-dev libsqlite3-dev sqlite3 libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev
+  libhwy-dev
   user-mode-linux kmod iproute2 can-utils
   chromium fonts-dejavu-core python3
 )

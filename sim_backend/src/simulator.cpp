@@ -1,10 +1,13 @@
 #include "emadiag/sim/simulator.hpp"
 
 #include "emadiag/sim/sim_error.hpp"
+#include "batch_kernels.hpp"
+#include "simd_target.hpp"
 #include "step_kernel.hpp"
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cctype>
 #include <cmath>
 #include <random>
@@ -14,7 +17,6 @@
 
 namespace emadiag::sim {
 
-using detail::Lanes;
 using detail::Shared;
 
 std::string to_string(LoadCase c) {
@@ -120,90 +122,6 @@ Shared detail::make_shared(const SimConfig& c) {
 
 namespace {
 
-template <int W>
-void load_lane(Lanes<W>& z, int l, const EmaParams& p) {
-    detail::lane(z.fdj, l) = p.fdj_nm;
-    detail::lane(z.fsj, l) = p.fsj_nm;
-    detail::lane(z.c_opp, l) = 1.0 / p.eta_o - 1.0;  // eq. (3), opposing
-    detail::lane(z.c_aid, l) = 1.0 - p.eta_a;        // eq. (3), aiding
-}
-
-/// Runs G interleaved groups of W lanes from rest to the end; lane l of group g fills out[g * W + l].
-/// Interleaving independent groups hides the latency of the step's dependency chain.
-template <int W, int G, bool kFull>
-void run_lanes(const Shared& shared, Lanes<W>* z, SimResult* out[W * G], bool record_truth) {
-    const Shared s = shared;  // a local copy: the lane stores cannot alias it, so its fields stay in registers
-    for (int l = 0; l < W * G; ++l) {
-        out[l]->samples.resize(static_cast<std::size_t>(s.total_samples));
-        if (record_truth) out[l]->truth.resize(static_cast<std::size_t>(s.total_samples));
-    }
-    const long aircraft_per_sample = s.steps_per_sample / s.steps_per_aircraft;
-    const double inv_steps = 1.0 / static_cast<double>(s.steps_per_sample);
-    const bool case_b = s.load_case == LoadCase::B;
-    using D = typename detail::Vec<W>::D;
-    long n = 0;
-    for (long k = 0; k < s.total_samples; ++k) {
-        for (int g = 0; g < G; ++g) {
-            z[g].sum_i = z[g].sum_w = z[g].sum_h = z[g].sum_tf = z[g].sum_tm = z[g].sum_fr = z[g].stuck_count = D{};
-        }
-        for (long a = 0; a < aircraft_per_sample; ++a) {
-            for (long j = 0; j < s.steps_per_aircraft; ++j) {
-                ++n;
-                const double t_step = static_cast<double>(n) * s.dt;  // section 7: step n runs at t = n dt
-                const double cmd_m = s.tau * detail::deg2rad(detail::command_deg_inline(s.sequence, t_step));
-                for (int g = 0; g < G; ++g) detail::step<W, kFull>(s, z[g], n, cmd_m);
-            }
-            if (case_b) {
-                for (int g = 0; g < G; ++g) detail::aircraft_update<W, kFull>(s, z[g]);
-            }
-        }
-        const double t = static_cast<double>(n) * s.dt;
-        const double cmd = command_deg(s.sequence, t);
-        for (int g = 0; g < G; ++g) {
-            Lanes<W>& zg = z[g];
-            for (int l = 0; l < W; ++l) {
-                SimResult& r = *out[g * W + l];
-                Sample& smp = r.samples[static_cast<std::size_t>(k)];
-                smp.t_s = t;
-                smp.current_a = detail::lane(zg.sum_i, l) * inv_steps;
-                smp.speed_rad_s = detail::lane(zg.sum_w, l) * inv_steps;
-                smp.theta_m_rad = detail::lane(zg.th, l);
-                smp.hinge_moment_nm = detail::lane(zg.sum_h, l) * inv_steps;
-                smp.command_deg = cmd;
-                if (!std::isfinite(smp.current_a) || !std::isfinite(smp.speed_rad_s) ||
-                    !std::isfinite(smp.theta_m_rad) || !std::isfinite(smp.hinge_moment_nm)) {
-                    r.finite = false;
-                }
-                if (record_truth) {
-                    SampleTruth& tr = r.truth[static_cast<std::size_t>(k)];
-                    tr.friction_torque_nm = detail::lane(zg.sum_tf, l) * inv_steps;
-                    tr.motor_torque_nm = detail::lane(zg.sum_tm, l) * inv_steps;
-                    tr.load_torque_nm = detail::lane(zg.sum_fr, l) * inv_steps;
-                    tr.stuck_all_period = detail::lane(zg.stuck_count, l) == static_cast<double>(s.steps_per_sample);
-                }
-            }
-        }
-    }
-    if constexpr (kFull) {
-        for (int g = 0; g < G; ++g) {
-            Lanes<W>& zg = z[g];
-            for (int l = 0; l < W; ++l) {
-                EnergyAccount& e = out[g * W + l]->energy;
-                e.electrical_in_j = detail::lane(zg.e_in, l);
-                e.copper_loss_j = detail::lane(zg.e_cu, l);
-                e.friction_work_j = detail::lane(zg.e_fr, l);
-                e.load_work_j = detail::lane(zg.e_load, l);
-                e.saturation_loss_j = detail::lane(zg.e_sat, l);
-                e.stop_loss_j = detail::lane(zg.e_stop, l);
-                e.stored_start_j = 0.0;
-                const double i = detail::lane(zg.i, l);
-                const double w = detail::lane(zg.w, l);
-                e.stored_end_j = 0.5 * s.l * i * i + 0.5 * s.j * w * w;
-            }
-        }
-    }
-}
-
 /// Measurement effects (sensor errors) act on the reported samples only.
 void apply_sensor_effects(std::vector<Sample>& samples, const Effects& fx) {
     if (fx.current_gain_error == 0.0 && fx.hinge_offset_nm == 0.0) return;
@@ -213,33 +131,18 @@ void apply_sensor_effects(std::vector<Sample>& samples, const Effects& fx) {
     }
 }
 
-bool needs_full(const SimConfig& c) { return c.record_truth || c.params.effects.any(); }
+}  // namespace
 
-template <int W, int G>
-void run_group(const SimConfig* configs[W * G], SimResult* out[W * G]) {
-    const Shared s = detail::make_shared(*configs[0]);
-    auto z = std::make_unique<Lanes<W>[]>(G);
-    for (int l = 0; l < W * G; ++l) load_lane(z[l / W], l % W, configs[l]->params);
-    bool full = false;
-    bool truth = false;
-    for (int l = 0; l < W * G; ++l) {
-        full = full || needs_full(*configs[l]);
-        truth = truth || configs[l]->record_truth;
+void detail::finish_run(const SimConfig& config, SimResult& result) {
+    if (!config.record_truth) {
+        result.truth.clear();
+        result.energy = EnergyAccount{};
     }
-    if (full) {
-        run_lanes<W, G, true>(s, z.get(), out, truth);
-    } else {
-        run_lanes<W, G, false>(s, z.get(), out, false);
-    }
-    for (int l = 0; l < W * G; ++l) {
-        if (!configs[l]->record_truth) {
-            out[l]->truth.clear();
-            out[l]->energy = EnergyAccount{};
-        }
-        apply_sensor_effects(out[l]->samples, configs[l]->params.effects);
-        apply_noise(out[l]->samples, configs[l]->noise, configs[l]->seed);
-    }
+    apply_sensor_effects(result.samples, config.params.effects);
+    apply_noise(result.samples, config.noise, config.seed);
 }
+
+namespace {
 
 std::string batch_mismatch(const SimConfig& a, const SimConfig& b) {
     if (a.load_case != b.load_case) return "load_case";
@@ -261,15 +164,46 @@ std::string batch_mismatch(const SimConfig& a, const SimConfig& b) {
 
 }  // namespace
 
+namespace {
+std::atomic<std::uint64_t> g_scalar_runs{0}, g_batch_runs{0};
+std::atomic<std::int64_t> g_scalar_ns{0}, g_batch_ns{0};
+
+/// Adds the wall time of a call to a counter when it ends (also when it throws).
+class CallTimer {
+public:
+    explicit CallTimer(std::atomic<std::int64_t>& ns) : ns_(ns), t0_(std::chrono::steady_clock::now()) {}
+    ~CallTimer() { ns_ += std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0_).count(); }
+    CallTimer(const CallTimer&) = delete;
+    CallTimer& operator=(const CallTimer&) = delete;
+
+private:
+    std::atomic<std::int64_t>& ns_;
+    std::chrono::steady_clock::time_point t0_;
+};
+}  // namespace
+
+SimCounters sim_counters() {
+    SimCounters c;
+    c.scalar_runs = g_scalar_runs;
+    c.scalar_s = static_cast<double>(g_scalar_ns) * 1e-9;
+    c.batch_runs = g_batch_runs;
+    c.batch_s = static_cast<double>(g_batch_ns) * 1e-9;
+    return c;
+}
+
 SimResult simulate(const SimConfig& config) {
+    const CallTimer timer(g_scalar_ns);
+    ++g_scalar_runs;
     SimResult result;
     const SimConfig* cfg[1] = {&config};
     SimResult* out[1] = {&result};
-    run_group<1, 1>(cfg, out);
+    detail::run_group<1, 1>(cfg, out);
     return result;
 }
 
 std::vector<SimResult> simulate_batch(const std::vector<SimConfig>& configs, unsigned threads) {
+    const CallTimer timer(g_batch_ns);
+    g_batch_runs += configs.size();
     std::vector<SimResult> results(configs.size());
     if (configs.empty()) return results;
     for (std::size_t i = 1; i < configs.size(); ++i) {
@@ -282,27 +216,37 @@ std::vector<SimResult> simulate_batch(const std::vector<SimConfig>& configs, uns
     configs[0].params.validate();
     for (const auto& c : configs) c.params.validate();
     (void)detail::make_shared(configs[0]);  // duration and step counts: throw here, not in a worker
-    constexpr int W = kBatchLanes * kBatchGroups;
-    const std::size_t groups = (configs.size() + W - 1) / W;
+    // One group is the chosen target's lanes x groups simulations (1 on the scalar path).
+    const bool scalar = detail::batch_runs_scalar();
+    const std::size_t width = scalar ? 1 : [] {
+        const detail::BatchShape shape = detail::batch_shape();
+        return static_cast<std::size_t>(shape.lanes) * static_cast<std::size_t>(shape.groups);
+    }();
+    const std::size_t groups = (configs.size() + width - 1) / width;
     std::atomic<std::size_t> next{0};
     std::exception_ptr failure;
     std::mutex failure_mutex;
     auto work = [&] {
-        std::vector<SimResult> pad(W);
+        std::vector<SimResult> pad(width);
+        std::vector<const SimConfig*> cfg(width);
+        std::vector<SimResult*> out(width);
         for (std::size_t g = next.fetch_add(1); g < groups; g = next.fetch_add(1)) {
-            const SimConfig* cfg[W];
-            SimResult* out[W];
-            for (int l = 0; l < W; ++l) {
-                const std::size_t idx = g * W + static_cast<std::size_t>(l);
+            for (std::size_t l = 0; l < width; ++l) {
+                const std::size_t idx = g * width + l;
                 if (idx < configs.size()) {
                     cfg[l] = &configs[idx];
                     out[l] = &results[idx];
                 } else {  // pad the last group with copies of its first lane, then discard them
-                    cfg[l] = &configs[g * W];
-                    out[l] = &pad[static_cast<std::size_t>(l)];
+                    cfg[l] = &configs[g * width];
+                    pad[l] = SimResult{};
+                    out[l] = &pad[l];
                 }
             }
-            run_group<kBatchLanes, kBatchGroups>(cfg, out);
+            if (scalar) {
+                detail::run_group<1, 1>(cfg.data(), out.data());
+            } else {
+                detail::run_batch_group(cfg.data(), out.data());
+            }
         }
     };
     auto worker = [&] {

@@ -8,9 +8,12 @@
 #include "core/run_csv.hpp"
 #include "discovery/candidate_effect.hpp"
 #include "discovery/discovery.hpp"
+#include "emadiag/sim/simulator.hpp"
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <chrono>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -116,14 +119,35 @@ const bool registered = register_command(Command{
         sub.add_option("--out-params", *out_params, "Write the model's simulator parameters (for simulate --params)");
         sub.add_option("--max-effects", *max_effects, "Most effects to add")->check(CLI::Range(0, discovery::kMaxEffects));
         return [=] {
+            const auto t0 = std::chrono::steady_clock::now();
             const Run run = read_run_csv_file(*path);
+            const auto t1 = std::chrono::steady_clock::now();
+            const sim::SimCounters sims0 = sim::sim_counters();
             discovery::DiscoveryOptions opt;
             opt.max_effects = *max_effects;
             const discovery::DiscoveryReport r = discovery::discover(run, opt);
+            const sim::SimCounters sims1 = sim::sim_counters();
+            const auto t2 = std::chrono::steady_clock::now();
             if (!out_model->empty()) write_json_file(*out_model, r.model.to_json());
             if (!out_params->empty()) write_json_file(*out_params, r.model.params.to_json());
             if (*json) std::cout << r.to_json().dump(2) << '\n';
             else print_text(std::cout, *path, r);
+            if (*json) return 0;  // the JSON report stays one document
+            // Where the time went.
+            const auto t3 = std::chrono::steady_clock::now();
+            const auto sec = [](auto a, auto b) { return std::chrono::duration<double>(b - a).count(); };
+            const double discovery_s = sec(t1, t2);
+            const double scalar_s = sims1.scalar_s - sims0.scalar_s;
+            const double batch_s = sims1.batch_s - sims0.batch_s;
+            const double rest_s = std::max(0.0, discovery_s - scalar_s - batch_s);
+            const auto pct = [&](double s) { return " (" + fmt(discovery_s > 0 ? 100.0 * s / discovery_s : 0.0, 3) + " %)"; };
+            std::ostream& os = std::cout;
+            os << "\ntime: " << fmt(sec(t0, t3), 3) << " s wall: reading the run " << fmt(sec(t0, t1), 2)
+               << " s, discovery " << fmt(discovery_s, 3) << " s, report " << fmt(sec(t2, t3), 2) << " s\n"
+               << "  discovery: " << sims1.scalar_runs - sims0.scalar_runs << " re-simulations on the scalar path "
+               << fmt(scalar_s, 3) << " s" << pct(scalar_s) << ", " << sims1.batch_runs - sims0.batch_runs
+               << " on the batched path (" << sim::simd_target().name << ") " << fmt(batch_s, 3) << " s" << pct(batch_s)
+               << ", screening, fits and signal processing " << fmt(rest_s, 3) << " s" << pct(rest_s) << '\n';
             return 0;
         };
     }});

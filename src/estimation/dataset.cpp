@@ -30,7 +30,7 @@ constexpr double kNominalFsjNm = 0.12;
 constexpr double kNominalEtaA = 0.823788;
 constexpr double kHealthSpread = 0.20;  // section 8: +/-20 %
 constexpr double kDatasheetTau = 800.0;
-constexpr int kChunkPerThread = 2 * sim::kBatchLanes;
+constexpr int kGroupsPerThread = 2;  // batch groups per thread and chunk
 
 
 }  // namespace
@@ -134,7 +134,10 @@ Dataset generate_dataset(const DatasetSpec& spec, unsigned threads, const Datase
     d.constants = RunConstants{datasheet.k_t_nm_per_a, datasheet.j_kgm2, datasheet.tau, sim::kSamplePeriodS};
     std::mt19937_64 rng(spec.seed);
     const int max_simulations = kMaxSimulationsPerRun * spec.count;
-    const int chunk = kChunkPerThread * static_cast<int>(threads);
+    // A chunk is whole batch groups of the instruction set in use (lanes x groups simulations each),
+    // so no lane is padding; the runs drawn do not depend on it (each chunk stops at spec.count).
+    const sim::SimdTarget simd = sim::simd_target();
+    const int chunk = kGroupsPerThread * simd.lanes * simd.groups * static_cast<int>(threads);
     while (d.filter.accepted < spec.count && d.filter.simulated < max_simulations) {
         const int n = std::min({chunk, max_simulations - d.filter.simulated, spec.count - d.filter.accepted});
         std::vector<sim::SimConfig> configs(static_cast<std::size_t>(n));

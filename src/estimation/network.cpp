@@ -6,6 +6,7 @@
 #include "core/emadiag_error.hpp"
 #include "core/residual_torque.hpp"
 #include "estimation/dataset.hpp"
+#include "estimation/network_kernels.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -239,17 +240,33 @@ void Network::unflatten(const Eigen::VectorXd& x) {
     b2_ = x.segment(at, b2_.size());
 }
 
+namespace {
+
+nn_kernels::NetworkView view_of(const Eigen::MatrixXd& w1, const Eigen::VectorXd& b1, const Eigen::MatrixXd& w2,
+                                const Eigen::VectorXd& b2) {
+    return {static_cast<int>(w1.cols()), static_cast<int>(w1.rows()), static_cast<int>(w2.rows()),
+            w1.data(), b1.data(), w2.data(), b2.data()};
+}
+
+}  // namespace
+
+std::string nn_kernels::variant() {
+    const std::string simd = sim::simd_target().name;
+    return simd == "avx512" || simd == "avx2" ? simd : "baseline";
+}
+
 Eigen::MatrixXd Network::forward(const Eigen::MatrixXd& x) const {
     if (x.rows() != inputs()) {
         throw EmadiagError("network input has " + std::to_string(x.rows()) + " rows, the network " +
                            std::to_string(inputs()) + " inputs");
     }
-    Eigen::MatrixXd a1 = w1_ * x;
-    a1.colwise() += b1_;
-    a1 = a1.array().tanh();  // tansig
-    Eigen::MatrixXd z2 = w2_ * a1;
-    z2.colwise() += b2_;
-    return z2.cwiseMax(-1.0).cwiseMin(1.0);  // satlins
+    Eigen::MatrixXd y(outputs(), x.cols());
+    const nn_kernels::NetworkView n = view_of(w1_, b1_, w2_, b2_);
+    const std::string v = nn_kernels::variant();
+    if (v == "avx512") nn_kernels::avx512::forward(n, x.data(), x.cols(), y.data());
+    else if (v == "avx2") nn_kernels::avx2::forward(n, x.data(), x.cols(), y.data());
+    else nn_kernels::baseline::forward(n, x.data(), x.cols(), y.data());
+    return y;
 }
 
 double Network::mse(const Eigen::MatrixXd& x, const Eigen::MatrixXd& t, Eigen::VectorXd* grad) const {
@@ -259,32 +276,16 @@ double Network::mse(const Eigen::MatrixXd& x, const Eigen::MatrixXd& t, Eigen::V
                            std::to_string(inputs()) + "-" + std::to_string(hidden()) + "-" + std::to_string(outputs()) +
                            " network");
     }
-    Eigen::MatrixXd a1 = w1_ * x;
-    a1.colwise() += b1_;
-    a1 = a1.array().tanh();
-    Eigen::MatrixXd z2 = w2_ * a1;
-    z2.colwise() += b2_;
-    const Eigen::MatrixXd y = z2.cwiseMax(-1.0).cwiseMin(1.0);
-    const Eigen::MatrixXd e = y - t;
-    const double count = static_cast<double>(e.size());
-    const double perf = e.squaredNorm() / count;
+    double* g = nullptr;
     if (grad != nullptr) {
-        // Backpropagation; satlins' derivative is 1 inside (-1, 1) and 0 where it clamps.
-        const Eigen::MatrixXd d2 = (2.0 / count) * e.array() * (z2.array().abs() < 1.0).cast<double>();
-        const Eigen::MatrixXd d1 = (w2_.transpose() * d2).array() * (1.0 - a1.array().square());
         grad->resize(parameter_count());
-        Eigen::Index at = 0;
-        const Eigen::MatrixXd gw1 = d1 * x.transpose();
-        grad->segment(at, gw1.size()) = Eigen::Map<const Eigen::VectorXd>(gw1.data(), gw1.size());
-        at += gw1.size();
-        grad->segment(at, b1_.size()) = d1.rowwise().sum();
-        at += b1_.size();
-        const Eigen::MatrixXd gw2 = d2 * a1.transpose();
-        grad->segment(at, gw2.size()) = Eigen::Map<const Eigen::VectorXd>(gw2.data(), gw2.size());
-        at += gw2.size();
-        grad->segment(at, b2_.size()) = d2.rowwise().sum();
+        g = grad->data();
     }
-    return perf;
+    const nn_kernels::NetworkView n = view_of(w1_, b1_, w2_, b2_);
+    const std::string v = nn_kernels::variant();
+    if (v == "avx512") return nn_kernels::avx512::mse(n, x.data(), t.data(), x.cols(), g);
+    if (v == "avx2") return nn_kernels::avx2::mse(n, x.data(), t.data(), x.cols(), g);
+    return nn_kernels::baseline::mse(n, x.data(), t.data(), x.cols(), g);
 }
 
 nlohmann::json Network::to_json() const {

@@ -7,8 +7,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <map>
 #include <numbers>
 #include <random>
 
@@ -57,20 +59,100 @@ std::vector<SimConfig> random_health(std::size_t n, std::uint64_t seed, LoadCase
     return ::testing::AssertionSuccess();
 }
 
-TEST(Simulator, BatchedPathMatchesScalarPathBitForBit) {
+/// Restores the batched path's instruction set (the widest, or EMADIAG_SIMD) when a test ends.
+class SimdTargetGuard {
+public:
+    SimdTargetGuard() : saved_(simd_target().name) {}
+    ~SimdTargetGuard() { set_simd_target(saved_); }
+    SimdTargetGuard(const SimdTargetGuard&) = delete;
+    SimdTargetGuard& operator=(const SimdTargetGuard&) = delete;
+
+private:
+    std::string saved_;
+};
+
+/// Every instruction set this CPU supports (scalar, SSE4, AVX2, AVX-512 on x86-64), forced one at a
+/// time, gives the scalar path's samples bit for bit: same operations in the same order, no FMA.
+TEST(Simulator, BatchedPathMatchesScalarPathBitForBitOnEverySupportedTarget) {
     const std::uint64_t seed = test_seed();
     std::cout << "seed " << seed << " (override with EMADIAG_TEST_SEED)\n";
-    for (auto [lc, seq] : {std::pair{LoadCase::B, Sequence::Dyn}, std::pair{LoadCase::A, Sequence::Brk},
-                           std::pair{LoadCase::AExt, Sequence::Dyn}}) {
-        // 19 runs: two full groups and a padded one; half with typical noise.
-        auto configs = random_health(19, seed, lc, seq);
+    const SimdTargetGuard guard;
+    const auto targets = supported_simd_targets();
+    ASSERT_FALSE(targets.empty());
+    EXPECT_EQ(targets.front(), "scalar");
+    struct Case {
+        LoadCase lc;
+        Sequence seq;
+        bool effects;  // the full step: effects beyond the datasheet (sin, exp per lane), truth
+    };
+    for (const Case& cs : {Case{LoadCase::B, Sequence::Dyn, false}, Case{LoadCase::A, Sequence::Brk, false},
+                           Case{LoadCase::AExt, Sequence::Dyn, false}, Case{LoadCase::B, Sequence::Sweep, true}}) {
+        // 29 runs: more than one full group on every target and a padded last one; half with noise.
+        auto configs = random_health(29, seed, cs.lc, cs.seq);
         for (std::size_t i = 0; i < configs.size(); i += 2) configs[i].noise = NoiseProfile::Typical;
-        const auto batch = simulate_batch(configs, 2);
-        ASSERT_EQ(batch.size(), configs.size());
-        for (std::size_t i = 0; i < configs.size(); ++i) {
-            EXPECT_TRUE(same_samples(batch[i].samples, simulate(configs[i]).samples))
-                << "case " << to_string(lc) << " sequence " << to_string(seq) << " run " << i;
+        if (cs.effects) {
+            for (auto& c : configs) {
+                c.params.effects.viscous_nm_s_rad = 1e-4;
+                c.params.effects.stribeck_amplitude_nm = 0.02;
+                c.params.effects.spall_amplitude_nm = 0.05;
+                c.params.effects.spall_center_deg = 3.0;
+                c.params.effects.ripple_amplitude_nm = 0.01;
+                c.params.effects.backlash_rad = 0.002;
+                c.params.effects.current_gain_error = 0.01;
+                c.record_truth = true;
+            }
         }
+        std::vector<SimResult> scalar;
+        for (const auto& c : configs) scalar.push_back(simulate(c));
+        for (const std::string& target : targets) {
+            set_simd_target(target);
+            const SimdTarget used = simd_target();
+            ASSERT_EQ(used.name, target);
+            std::cout << "target " << used.name << ": " << used.lanes << " lanes x " << used.groups << " groups\n";
+            const auto batch = simulate_batch(configs, 2);
+            ASSERT_EQ(batch.size(), configs.size());
+            for (std::size_t i = 0; i < configs.size(); ++i) {
+                EXPECT_TRUE(same_samples(batch[i].samples, scalar[i].samples))
+                    << "target " << target << " case " << to_string(cs.lc) << " sequence " << to_string(cs.seq)
+                    << (cs.effects ? " with effects" : "") << " run " << i;
+                if (cs.effects) {
+                    ASSERT_EQ(batch[i].truth.size(), scalar[i].truth.size());
+                    for (std::size_t k = 0; k < scalar[i].truth.size(); ++k) {
+                        ASSERT_EQ(batch[i].truth[k].friction_torque_nm, scalar[i].truth[k].friction_torque_nm)
+                            << "target " << target << " run " << i << " sample " << k;
+                    }
+                    EXPECT_EQ(batch[i].energy.friction_work_j, scalar[i].energy.friction_work_j) << target;
+                    EXPECT_EQ(batch[i].energy.stop_loss_j, scalar[i].energy.stop_loss_j) << target;
+                }
+            }
+        }
+    }
+}
+
+TEST(Simulator, SimdTargetsNameWhatTheyRunOn) {
+    const SimdTargetGuard guard;
+    const auto targets = supported_simd_targets();
+    for (const std::string& target : targets) {
+        set_simd_target(target);
+        const SimdTarget t = simd_target();
+        EXPECT_EQ(t.name, target);
+        const std::map<std::string, int> expected_lanes = {{"scalar", 1}, {"sse4", 2}, {"neon", 2}, {"avx2", 4}, {"avx512", 8}};
+        const auto it = expected_lanes.find(target);
+        ASSERT_NE(it, expected_lanes.end()) << target;
+        EXPECT_EQ(t.lanes, it->second) << target;
+        EXPECT_LE(t.lanes, kBatchLanes);
+    }
+    set_simd_target("best");
+    EXPECT_EQ(simd_target().name, targets.back());
+}
+
+TEST(Simulator, AnUnknownOrUnsupportedSimdTargetIsAClearError) {
+    const SimdTargetGuard guard;
+    EXPECT_THAT([] { set_simd_target("avx1024"); },
+                ThrowsMessage<SimError>(HasSubstr("'avx1024' is not a SIMD target; expected best or one of: scalar")));
+    const auto targets = supported_simd_targets();
+    if (std::find(targets.begin(), targets.end(), "avx512") == targets.end()) {
+        EXPECT_THAT([] { set_simd_target("avx512"); }, ThrowsMessage<SimError>(HasSubstr("not supported by this CPU")));
     }
 }
 

@@ -104,12 +104,43 @@ struct SimResult {
 [[nodiscard]] SimResult simulate(const SimConfig& config);
 
 /// Many simulations that differ only in FDJ, FSJ, eta_O, eta_A, noise seed (and noise profile),
-/// run on the batched SIMD path (structure of arrays, kBatchLanes lanes x kBatchGroups) over `threads` threads.
+/// run on the batched SIMD path (structure of arrays, simd_target().lanes lanes x groups) over
+/// `threads` threads. The results are those of simulate, bit for bit, on every instruction set.
 /// All other fields of the configs must be equal; throws SimError naming the first that is not.
 [[nodiscard]] std::vector<SimResult> simulate_batch(const std::vector<SimConfig>& configs, unsigned threads = 1);
+/// The widest lane count of the batched path (AVX-512: 8 doubles); simd_target().lanes is the one in use.
 inline constexpr int kBatchLanes = 8;
-/// Independent lane groups stepped together to hide the step's latency (kBatchLanes * kBatchGroups per batch).
+/// Independent lane groups stepped together to hide the step's latency (lanes * kBatchGroups per batch).
 inline constexpr int kBatchGroups = 3;
+
+/// The instruction set simulate_batch runs on: one binary built for baseline x86-64 picks the
+/// widest the CPU has at run time (Google Highway dynamic dispatch).
+struct SimdTarget {
+    std::string name;  ///< "scalar", "sse4", "avx2", "avx512" (or "neon", "emu128": Highway's portable fallback)
+    int lanes = 1;     ///< doubles per vector
+    int groups = 1;    ///< vectors stepped together; a batch group is lanes * groups simulations
+};
+/// The environment variable that narrows the batched path at first use (same values as set_simd_target).
+inline constexpr const char* kSimdEnvVar = "EMADIAG_SIMD";
+/// The target in use now. The first call reads EMADIAG_SIMD; throws SimError if it names an unknown
+/// target or one this CPU lacks.
+[[nodiscard]] SimdTarget simd_target();
+/// The targets this CPU and this build support, narrowest first: always "scalar" (simulate, one run
+/// at a time), then e.g. "sse4", "avx2", "avx512".
+[[nodiscard]] std::vector<std::string> supported_simd_targets();
+/// Makes simulate_batch run on `name` (one of supported_simd_targets(), or "best" for the widest).
+/// Throws SimError naming the value and the supported ones. Process-wide; call it while no batch runs.
+void set_simd_target(const std::string& name);
+
+/// What this process has simulated so far (simulate and simulate_batch), for time breakdowns: runs,
+/// and the wall time spent in the calls, summed over the calling threads.
+struct SimCounters {
+    std::uint64_t scalar_runs = 0;   ///< simulate calls
+    double scalar_s = 0;
+    std::uint64_t batch_runs = 0;    ///< simulations run through simulate_batch
+    double batch_s = 0;
+};
+[[nodiscard]] SimCounters sim_counters();
 
 /// Adds the noise profile to samples in place (seeded; Gaussian on top of std::mt19937_64),
 /// then quantises to the sensor resolutions. NoiseProfile::None leaves the samples untouched.

@@ -1,0 +1,21 @@
+#pragma once
+// The batched path's entry points (batch_kernels.cpp): one group of simulations on the instruction
+// set Highway chose at run time (the widest this CPU has, unless narrowed by hwy::DisableTargets).
+#include "emadiag/sim/simulator.hpp"
+
+namespace emadiag::sim::detail {
+
+/// Lane layout of the chosen target: its name (Highway's: "SSE4", "AVX2", "AVX3" = AVX-512, ...),
+/// doubles per vector, and vectors stepped together. A group is lanes * groups simulations.
+struct BatchShape {
+    const char* target = "";
+    int lanes = 1;
+    int groups = 1;
+};
+[[nodiscard]] BatchShape batch_shape();
+
+/// Runs batch_shape().lanes * groups simulations that differ only in health; configs and out hold
+/// that many pointers (pad with copies). Finishes each run as simulate does.
+void run_batch_group(const SimConfig* const* configs, SimResult* const* out);
+
+}  // namespace emadiag::sim::detail

@@ -1,0 +1,381 @@
+// The integration step of ema-reference.md section 3, written once over W lanes (structure of
+// arrays), and the loop that runs groups of lanes from rest to the end of a run.
+//
+// No include guard: this body is included inside a namespace, once per lane type. The scalar path
+// (W = 1, plain double and bool) includes it in emadiag::sim::detail (step_kernel.hpp); the batched
+// path includes it once per Highway target in emadiag::sim::N_<TARGET> (batch_kernels.cpp), so
+// each instruction set gets its own copy compiled for it. The enclosing namespace provides:
+//   Vec<W>::D, Vec<W>::M           the lane vector of doubles and its mask;
+//   sel(M, D, D), vnot(M), vabs(D) select, mask negation, |x| (sign bit cleared);
+//   to_array(D, double*), from_array(const double*) -> D;
+//   namespace self                 an alias of the enclosing namespace (calls here are qualified,
+//                                  so argument-dependent lookup cannot pick another copy).
+// The operations are the same, in the same order, for every W (IEEE add, sub, mul, compare,
+// select, sign-bit and/or; no FMA: the library builds with -ffp-contract=off), so every lane width
+// gives the scalar path's results bit for bit.
+// kFull adds the effects beyond the datasheet, the truth and the energy accounts.
+
+template <int W>
+struct Lanes {
+    using D = typename Vec<W>::D;
+    // health parameters per lane
+    D fdj, fsj, c_opp, c_aid;
+    // state
+    D i, w, th, x[4];
+    D gap;  // backlash: motor angle minus load angle, within +/- backlash/2
+    // BRK sequencer
+    D phase, ramp_i, ramp_start_th, last_iref, hold_end_n;
+    // period accumulators
+    D sum_i, sum_w, sum_h, sum_tf, sum_tm, sum_fr, stuck_count;
+    // energy accounts (kFull)
+    D e_in, e_cu, e_fr, e_load, e_sat, e_stop;
+};
+
+template <class M>
+inline M mask_of(bool b) { return b ? vnot(M{}) : M{}; }
+template <class D>
+inline D vclamp(D a, double lo, double hi) {
+    a = sel(a < lo, D{} + lo, a);
+    return sel(a > hi, D{} + hi, a);
+}
+
+/// One step with the command of step n, cmd_m = tau * radians(command_deg(t = n dt)), computed by
+/// the caller (it is shared by every lane and group of a batch).
+template <int W, bool kFull>
+inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m) {
+    using D = typename Vec<W>::D;
+    using M = typename Vec<W>::M;
+    using detail::kPhaseHold0, detail::kPhaseRampUp, detail::kPhaseHold1, detail::kPhaseRampDown, detail::kPhaseHold2;
+    const detail::Shared& s = shared;
+    const double dt = s.dt;
+    const double t = static_cast<double>(n) * dt;  // section 7: step n runs at t = n dt
+    const D zero{};
+    const D one = zero + 1.0;
+
+    // BRK: entering a ramp at the start of this step (sections 5 and 7).
+    D phase = z.phase;
+    M ramping = M{};
+    D ramp_rate = zero;
+    if (s.sequence == Sequence::Brk) {
+        const double dn = static_cast<double>(n);
+        const M start_up = (phase == kPhaseHold0) & mask_of<M>(dn > static_cast<double>(s.brk_first_hold_steps));
+        const M start_down = (phase == kPhaseHold1) & (z.hold_end_n < dn);
+        const M start_ramp = start_up | start_down;
+        phase = sel(start_up, zero + kPhaseRampUp, sel(start_down, zero + kPhaseRampDown, phase));
+        z.ramp_i = sel(start_ramp, z.last_iref, z.ramp_i);
+        z.ramp_start_th = sel(start_ramp, z.th, z.ramp_start_th);
+        ramping = (phase == kPhaseRampUp) | (phase == kPhaseRampDown);
+        ramp_rate = sel(phase == kPhaseRampUp, zero + kBrkRampAPerS * dt, zero - kBrkRampAPerS * dt);
+    }
+
+    // 1. Command: cmd_m (shared by all lanes).
+    // 2. Controller.
+    const D w_ref = vclamp(s.k_theta * (cmd_m - z.th), -s.w_max, s.w_max);
+    const D i_pos = vclamp(s.k_w * (w_ref - z.w), -s.i_max, s.i_max);
+    D i_ref = i_pos;
+    if (s.sequence == Sequence::Brk) {
+        i_ref = sel(ramping, vclamp(z.ramp_i, -s.i_max, s.i_max), i_pos);
+        z.ramp_i = sel(ramping, z.ramp_i + ramp_rate, z.ramp_i);
+        z.last_iref = i_ref;
+    }
+
+    // 3. Motor: bang-bang voltage, R-L with BEMF (paper section 2.2).
+    const D i0 = z.i;
+    const D w0 = z.w;
+    // I += dt (V - k_t w - R I) / L with V = V_dc sgn(I_ref - I), arranged so that only the selects
+    // follow the sign decision (the step's critical path): the three candidate currents are ready
+    // before it. sgn(I_ref - I) compares I_ref with I directly (the same for every finite or infinite
+    // pair: a difference of two different doubles is never zero), and I_base + (-dt V_dc / L) is
+    // exactly I_base - dt V_dc / L.
+    M v_up, v_down;
+    if (s.sequence == Sequence::Brk) {
+        v_up = i_ref > i0;
+        v_down = i_ref < i0;
+    } else {
+        // I_ref = clamp(y, +/-I_max) = min(max(y, -I_max), I_max) is compared with I without waiting
+        // for the clamp: min(a, M) > I <=> a > I and M > I; max(y, -M) > I <=> y > I or -M > I
+        // (and the mirror images for <).
+        const D y = s.k_w * (w_ref - w0);
+        v_up = ((y > i0) | (-s.i_max > i0)) & (s.i_max > i0);
+        v_down = ((y < i0) & (-s.i_max < i0)) | (s.i_max < i0);
+    }
+    const D i_base = i0 - s.dt_over_l * (s.k_t * w0 + s.r * i0);
+    const double di_v = s.dt_over_l * s.v_dc;
+    const D i1 = sel(v_up, i_base + di_v, sel(v_down, i_base - di_v, i_base + zero));
+    z.i = i1;
+    D t_m = vclamp(s.k_t * i1, -s.t_max, s.t_max);
+
+    // 4. Load (section 4). Case B: hinge moment from the trim deviations, theta_m at step start.
+    D th_load = z.th;
+    if constexpr (kFull) th_load = th_load - z.gap;
+    D h;
+    if (s.load_case == LoadCase::B) {
+        const D alpha_t = z.x[1] + z.x[3] * (detail::kTailArmM / detail::kAirspeedMS);
+        const D delta_rad = th_load * s.inv_tau;
+        h = -(detail::kQbarPa * detail::kSeM2 * detail::kCeM *
+              (detail::kChAlphaPerRad * alpha_t + detail::kChDeltaPerRad * delta_rad));
+    } else if (s.load_case == LoadCase::AExt) {
+        h = zero + (detail::kCaseAHingeNm + detail::kAExtHingeRateNmPerS * t);
+    } else {
+        h = zero + detail::kCaseAHingeNm;
+    }
+    D f_r = h * s.inv_tau;
+
+    // 5. Friction: Borello (paper eqs. 2, 3, 5).
+    D extra_dyn = zero, extra_stat = zero, viscous = zero;
+    M in_gap = M{};
+    if constexpr (kFull) {
+        // The effects beyond the datasheet use sin and exp: lane by lane, the same library calls as
+        // the scalar path.
+        double tm_a[W], th_a[W], thl_a[W], w0_a[W], dyn_a[W], stat_a[W];
+        to_array(t_m, tm_a);
+        to_array(z.th, th_a);
+        to_array(th_load, thl_a);
+        to_array(w0, w0_a);
+        for (int l = 0; l < W; ++l) {
+            tm_a[l] += s.fx.ripple_amplitude_nm * std::sin(s.fx.ripple_periods_per_rev * th_a[l]);
+            const double spall = s.fx.spall_amplitude_nm == 0.0 ? 0.0
+                : s.fx.spall_amplitude_nm *
+                      std::exp(-0.5 * std::pow((detail::rad2deg(thl_a[l] * s.inv_tau) - s.fx.spall_center_deg) /
+                                                   s.fx.spall_width_deg, 2));
+            const double wr = w0_a[l] / s.fx.stribeck_speed_rad_s;
+            dyn_a[l] = spall + s.fx.stribeck_amplitude_nm * std::exp(-wr * wr);
+            stat_a[l] = spall;
+        }
+        t_m = from_array(tm_a);
+        extra_dyn = from_array(dyn_a);
+        extra_stat = from_array(stat_a);
+        viscous = s.fx.viscous_nm_s_rad * w0;
+        // Backlash: inside the free play the load and the transmission friction are not felt.
+        if (s.fx.backlash_rad > 0.0) in_gap = vabs(z.gap) < 0.5 * s.fx.backlash_rad;
+        f_r = sel(in_gap, zero, f_r);
+    }
+    const D t_act = t_m - f_r;
+    const M moving = vnot(w0 == 0.0);
+    const M w_pos = w0 > 0.0;
+    // Direction d = +1 where d_pos, else -1: sgn(w) while moving, sgn(T_act) (-1 at 0) while stuck.
+    const M d_pos = w_pos | (vnot(moving) & (t_act > 0.0));
+    // F_R d > 0 (opposing), without the multiplication by d = +/-1.
+    const M opposing = (d_pos & (f_r > 0.0)) | (vnot(d_pos) & (f_r < 0.0));
+    const D c = sel(opposing, z.c_opp, z.c_aid);
+    const D c_fr = c * vabs(f_r);
+    D dyn = z.fdj + c_fr;
+    D stat = z.fsj + c_fr;
+    if constexpr (kFull) {
+        dyn = sel(in_gap, zero, dyn + extra_dyn);
+        stat = sel(in_gap, zero, stat + extra_stat);
+    }
+    const M stuck = vnot(moving) & (vabs(t_act) <= stat);
+    D t_slip = sel(d_pos, dyn, -dyn);  // d * dyn: friction while slipping (or breaking away)
+    if constexpr (kFull) t_slip = t_slip + viscous;
+    const D t_f = sel(stuck, t_act, t_slip);
+    // w + dt (T_act - T_F) / J while slipping, arranged so T_act enters last (critical path).
+    const D w_free = (w0 - t_slip * s.dt_inv_j) + t_act * s.dt_inv_j;
+    // A moving shaft whose speed would change sign stops instead (max/min with 0 keep it one op deep).
+    const M reversal_stop = moving & (w_free * w0 < 0.0);
+    // w_new is 0 (stuck, or a moving shaft whose speed would change sign) or w_free. The two forms
+    // below give the same value in every case; the faster one differs between the scalar step
+    // (one decision, one select) and the vector step (blends).
+    D w1;
+    if constexpr (W == 1) {
+        const M to_zero = stuck | (w_pos & (w_free < 0.0)) | ((moving & vnot(w_pos)) & (w_free > 0.0));
+        w1 = sel(to_zero, zero, w_free);
+    } else {
+        const D w_slip = sel(w_pos, sel(w_free < 0.0, zero, w_free), sel(w_free > 0.0, zero, w_free));
+        w1 = sel(moving, w_slip, sel(stuck, zero, w_free));
+    }
+
+    // 6. Position and end stops.
+    D th1 = z.th + dt * w1;
+    const M at_stop = vabs(th1) > s.stop_m;
+    th1 = vclamp(th1, -s.stop_m, s.stop_m);
+    const D w_before_stop = w1;
+    w1 = sel(at_stop, zero, w1);
+    if constexpr (kFull) {
+        const double half = 0.5 * s.fx.backlash_rad;
+        z.gap = vclamp(z.gap + (th1 - z.th), -half, half);
+        const D v = sel(v_up, zero + s.v_dc, sel(v_down, zero - s.v_dc, zero));
+        const D i_avg = 0.5 * (i0 + i1);
+        z.e_in = z.e_in + v * i_avg * dt;
+        z.e_cu = z.e_cu + s.r * i0 * i_avg * dt;
+        const D w_avg = 0.5 * (w0 + w1);
+        z.e_fr = z.e_fr + t_f * w_avg * dt;
+        z.e_load = z.e_load + f_r * w_avg * dt;
+        z.e_sat = z.e_sat + (s.k_t * i1 - t_m) * w_avg * dt;
+        // Kinetic energy removed by zeroing the speed (reversal stop and end stop).
+        const D w_unclipped = sel(reversal_stop, w_free, w_before_stop);
+        z.e_stop = z.e_stop + sel(reversal_stop | at_stop, 0.5 * s.j * (w_unclipped * w_unclipped - w1 * w1), zero);
+        z.sum_tf = z.sum_tf + t_f;
+        z.sum_tm = z.sum_tm + t_m;
+        z.sum_fr = z.sum_fr + f_r;
+        z.stuck_count = z.stuck_count + sel(stuck, one, zero);
+    }
+    z.th = th1;
+    z.w = w1;
+
+    // BRK: end of a ramp after the position update; the next hold starts on the next step.
+    if (s.sequence == Sequence::Brk) {
+        const M moved = ramping & (vabs(th1 - z.ramp_start_th) >= kBrkMoveRad);
+        const M up = phase == kPhaseRampUp;
+        z.hold_end_n = sel(moved & up, zero + (static_cast<double>(n) + static_cast<double>(s.brk_mid_hold_steps)),
+                           z.hold_end_n);
+        z.phase = sel(moved, sel(up, zero + kPhaseHold1, zero + kPhaseHold2), phase);
+    }
+
+    // Period means (section 7): I after step 3, w after step 6, the H used in step 4.
+    z.sum_i = z.sum_i + i1;
+    z.sum_w = z.sum_w + w1;
+    z.sum_h = z.sum_h + h;
+}
+
+/// One step n, computing the command itself.
+template <int W, bool kFull>
+inline void step(const detail::Shared& s, Lanes<W>& z, long n) {
+    const double t = static_cast<double>(n) * s.dt;  // section 7: step n runs at t = n dt
+    self::step<W, kFull>(s, z, n, s.tau * detail::deg2rad(detail::command_deg_inline(s.sequence, t)));
+}
+
+/// Case B aircraft update every 1e-4 s (section 3 step 7), forward Euler, delta_e in degrees.
+template <int W, bool kFull>
+inline void aircraft_update(const detail::Shared& s, Lanes<W>& z) {
+    using D = typename Vec<W>::D;
+    D th_load = z.th;
+    if constexpr (kFull) th_load = th_load - z.gap;
+    const D de = th_load * s.inv_tau * (180.0 / std::numbers::pi);
+    D dx[4];
+    for (int r = 0; r < 4; ++r) {
+        dx[r] = detail::kA[r][0] * z.x[0] + detail::kA[r][1] * z.x[1] + detail::kA[r][2] * z.x[2] +
+                detail::kA[r][3] * z.x[3];
+    }
+    dx[3] = dx[3] + detail::kB3 * de;
+    for (int r = 0; r < 4; ++r) z.x[r] = z.x[r] + kAircraftPeriodS * dx[r];
+}
+
+/// Runs G interleaved groups of W lanes from rest to the end; lane l of group g fills out[g * W + l].
+/// Interleaving independent groups hides the latency of the step's dependency chain.
+template <int W, int G, bool kFull>
+inline void run_lanes(const detail::Shared& shared, Lanes<W>* z, SimResult* const* out, bool record_truth) {
+    const detail::Shared s = shared;  // a local copy: the lane stores cannot alias it, so its fields stay in registers
+    for (int l = 0; l < W * G; ++l) {
+        out[l]->samples.resize(static_cast<std::size_t>(s.total_samples));
+        if (record_truth) out[l]->truth.resize(static_cast<std::size_t>(s.total_samples));
+    }
+    const long aircraft_per_sample = s.steps_per_sample / s.steps_per_aircraft;
+    const double inv_steps = 1.0 / static_cast<double>(s.steps_per_sample);
+    const bool case_b = s.load_case == LoadCase::B;
+    using D = typename Vec<W>::D;
+    long n = 0;
+    for (long k = 0; k < s.total_samples; ++k) {
+        for (int g = 0; g < G; ++g) {
+            z[g].sum_i = z[g].sum_w = z[g].sum_h = z[g].sum_tf = z[g].sum_tm = z[g].sum_fr = z[g].stuck_count = D{};
+        }
+        for (long a = 0; a < aircraft_per_sample; ++a) {
+            for (long j = 0; j < s.steps_per_aircraft; ++j) {
+                ++n;
+                const double t_step = static_cast<double>(n) * s.dt;  // section 7: step n runs at t = n dt
+                const double cmd_m = s.tau * detail::deg2rad(detail::command_deg_inline(s.sequence, t_step));
+                for (int g = 0; g < G; ++g) self::step<W, kFull>(s, z[g], n, cmd_m);
+            }
+            if (case_b) {
+                for (int g = 0; g < G; ++g) self::aircraft_update<W, kFull>(s, z[g]);
+            }
+        }
+        const double t = static_cast<double>(n) * s.dt;
+        const double cmd = detail::command_deg_inline(s.sequence, t);
+        for (int g = 0; g < G; ++g) {
+            Lanes<W>& zg = z[g];
+            double sum_i[W], sum_w[W], th[W], sum_h[W];
+            double sum_tf[W]{}, sum_tm[W]{}, sum_fr[W]{}, stuck[W]{};  // filled when record_truth
+            to_array(zg.sum_i, sum_i);
+            to_array(zg.sum_w, sum_w);
+            to_array(zg.th, th);
+            to_array(zg.sum_h, sum_h);
+            if (record_truth) {
+                to_array(zg.sum_tf, sum_tf);
+                to_array(zg.sum_tm, sum_tm);
+                to_array(zg.sum_fr, sum_fr);
+                to_array(zg.stuck_count, stuck);
+            }
+            for (int l = 0; l < W; ++l) {
+                SimResult& r = *out[g * W + l];
+                Sample& smp = r.samples[static_cast<std::size_t>(k)];
+                smp.t_s = t;
+                smp.current_a = sum_i[l] * inv_steps;
+                smp.speed_rad_s = sum_w[l] * inv_steps;
+                smp.theta_m_rad = th[l];
+                smp.hinge_moment_nm = sum_h[l] * inv_steps;
+                smp.command_deg = cmd;
+                if (!std::isfinite(smp.current_a) || !std::isfinite(smp.speed_rad_s) ||
+                    !std::isfinite(smp.theta_m_rad) || !std::isfinite(smp.hinge_moment_nm)) {
+                    r.finite = false;
+                }
+                if (record_truth) {
+                    SampleTruth& tr = r.truth[static_cast<std::size_t>(k)];
+                    tr.friction_torque_nm = sum_tf[l] * inv_steps;
+                    tr.motor_torque_nm = sum_tm[l] * inv_steps;
+                    tr.load_torque_nm = sum_fr[l] * inv_steps;
+                    tr.stuck_all_period = stuck[l] == static_cast<double>(s.steps_per_sample);
+                }
+            }
+        }
+    }
+    if constexpr (kFull) {
+        for (int g = 0; g < G; ++g) {
+            Lanes<W>& zg = z[g];
+            double e_in[W], e_cu[W], e_fr[W], e_load[W], e_sat[W], e_stop[W], i[W], w[W];
+            to_array(zg.e_in, e_in);
+            to_array(zg.e_cu, e_cu);
+            to_array(zg.e_fr, e_fr);
+            to_array(zg.e_load, e_load);
+            to_array(zg.e_sat, e_sat);
+            to_array(zg.e_stop, e_stop);
+            to_array(zg.i, i);
+            to_array(zg.w, w);
+            for (int l = 0; l < W; ++l) {
+                EnergyAccount& e = out[g * W + l]->energy;
+                e.electrical_in_j = e_in[l];
+                e.copper_loss_j = e_cu[l];
+                e.friction_work_j = e_fr[l];
+                e.load_work_j = e_load[l];
+                e.saturation_loss_j = e_sat[l];
+                e.stop_loss_j = e_stop[l];
+                e.stored_start_j = 0.0;
+                e.stored_end_j = 0.5 * s.l * i[l] * i[l] + 0.5 * s.j * w[l] * w[l];
+            }
+        }
+    }
+}
+
+/// Runs W * G simulations that differ only in health (checked by the caller) on G groups of W lanes,
+/// then finishes each run (truth, sensor effects, noise).
+template <int W, int G>
+inline void run_group(const SimConfig* const* configs, SimResult* const* out) {
+    const detail::Shared s = detail::make_shared(*configs[0]);
+    auto z = std::make_unique<Lanes<W>[]>(G);
+    for (int g = 0; g < G; ++g) {
+        double fdj[W], fsj[W], c_opp[W], c_aid[W];
+        for (int l = 0; l < W; ++l) {
+            const EmaParams& p = configs[g * W + l]->params;
+            fdj[l] = p.fdj_nm;
+            fsj[l] = p.fsj_nm;
+            c_opp[l] = 1.0 / p.eta_o - 1.0;  // eq. (3), opposing
+            c_aid[l] = 1.0 - p.eta_a;        // eq. (3), aiding
+        }
+        z[g].fdj = from_array(fdj);
+        z[g].fsj = from_array(fsj);
+        z[g].c_opp = from_array(c_opp);
+        z[g].c_aid = from_array(c_aid);
+    }
+    bool full = false;
+    bool truth = false;
+    for (int l = 0; l < W * G; ++l) {
+        full = full || configs[l]->record_truth || configs[l]->params.effects.any();
+        truth = truth || configs[l]->record_truth;
+    }
+    if (full) {
+        self::run_lanes<W, G, true>(s, z.get(), out, truth);
+    } else {
+        self::run_lanes<W, G, false>(s, z.get(), out, false);
+    }
+    for (int l = 0; l < W * G; ++l) detail::finish_run(*configs[l], *out[l]);
+}
