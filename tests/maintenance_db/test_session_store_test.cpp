@@ -32,7 +32,7 @@ using ::testing::Pair;
 using ::testing::SizeIs;
 using ::testing::ThrowsMessage;
 
-constexpr int kNewestSchemaVersion = 2;  // schema/002_test_sessions.sql
+constexpr int kNewestSchemaVersion = 4;  // schema/004_append_only.sql
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -101,7 +101,7 @@ std::vector<StoredFinding> sorted_as_loaded(std::vector<StoredFinding> findings)
 /// Rows in every table of the database (sqlite_sequence included), by table name.
 std::map<std::string, std::int64_t> row_counts(Database& db) {
     std::vector<std::string> tables;
-    Statement names(db, "SELECT name FROM sqlite_master WHERE type = 'table' ORDER BY name");
+    Statement names(db, "SELECT name FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite_%' ORDER BY name");
     while (names.step()) tables.push_back(names.column_text(0));
     std::map<std::string, std::int64_t> counts;
     for (const auto& t : tables) {
@@ -284,14 +284,17 @@ TEST(TestSessionStore, SchemaChecksAreTheSecondLineOfDefence) {
     // Straight SQL, past the checks in store_test_session: the schema still refuses bad values.
     Database db(":memory:");
     db.exec("INSERT INTO aircraft VALUES ('F-WEMA')");
-    const std::string session_sql = "INSERT INTO test_sessions(tail_number, phase, started_utc, verdict) VALUES ";
-    EXPECT_THAT([&] { db.exec(session_sql + "('F-WEMA', 'mid-flight', '2026-11-22T20:00:00Z', 'NO_TEST')"); },
+    const std::string session_sql = "INSERT INTO test_sessions(tail_number, phase, started_utc, verdict, prev_sha256, content_sha256) VALUES ";
+    const std::string hashes = ", '', '" + std::string(64, 'a') + "')";
+    EXPECT_THAT([&] { db.exec(session_sql + "('F-WEMA', 'pre-flight', '2026-11-22T20:00:00Z', 'NO_TEST', NULL, NULL)"); },
+                ThrowsMessage<DbError>(HasSubstr("append-only record: a test session is stored with its hash chain")));
+    EXPECT_THAT([&] { db.exec(session_sql + "('F-WEMA', 'mid-flight', '2026-11-22T20:00:00Z', 'NO_TEST'" + hashes); },
                 ThrowsMessage<DbError>(HasSubstr("CHECK constraint failed")));
-    EXPECT_THAT([&] { db.exec(session_sql + "('F-WEMA', 'pre-flight', '2026-11-22T20:00:00Z', 'OK')"); },
+    EXPECT_THAT([&] { db.exec(session_sql + "('F-WEMA', 'pre-flight', '2026-11-22T20:00:00Z', 'OK'" + hashes); },
                 ThrowsMessage<DbError>(HasSubstr("CHECK constraint failed")));
-    EXPECT_THAT([&] { db.exec(session_sql + "('F-WNONE', 'pre-flight', '2026-11-22T20:00:00Z', 'NO_TEST')"); },
+    EXPECT_THAT([&] { db.exec(session_sql + "('F-WNONE', 'pre-flight', '2026-11-22T20:00:00Z', 'NO_TEST'" + hashes); },
                 ThrowsMessage<DbError>(HasSubstr("FOREIGN KEY constraint failed")));
-    db.exec(session_sql + "('F-WEMA', 'pre-flight', '2026-11-22T20:00:00Z', 'NO_TEST')");
+    db.exec(session_sql + "('F-WEMA', 'pre-flight', '2026-11-22T20:00:00Z', 'NO_TEST'" + hashes);
     const std::string finding_sql = "INSERT INTO findings(session_id, parameter, estimator, limit_value, limit_kind, status) VALUES ";
     EXPECT_THAT([&] { db.exec(finding_sql + "(1, 'FDJ_Nm', 'physics', 0.1, 'below', 'WITHIN')"); },
                 ThrowsMessage<DbError>(HasSubstr("CHECK constraint failed")));
@@ -302,8 +305,15 @@ TEST(TestSessionStore, SchemaChecksAreTheSecondLineOfDefence) {
     db.exec(finding_sql + "(1, 'FDJ_Nm', 'physics', 0.1, 'max', 'WITHIN')");
     EXPECT_THAT([&] { db.exec(finding_sql + "(1, 'FDJ_Nm', 'physics', 0.1, 'max', 'BEYOND')"); },
                 ThrowsMessage<DbError>(HasSubstr("UNIQUE constraint failed: findings")));
-    db.exec("DELETE FROM test_sessions");
-    EXPECT_EQ(row_counts(db).at("findings"), 0) << "a session's findings go with it";
+    for (const char* table : {"test_sessions", "findings"}) {
+        EXPECT_THAT([&] { db.exec(std::string("DELETE FROM ") + table); },
+                    ThrowsMessage<DbError>(HasSubstr(std::string("append-only record: ") + table + " rows are never deleted")));
+    }
+    EXPECT_THAT([&] { db.exec("UPDATE findings SET status = 'WITHIN'"); },
+                ThrowsMessage<DbError>(HasSubstr("append-only record: findings rows are never updated")));
+    EXPECT_THAT([&] { db.exec("UPDATE test_sessions SET verdict = 'SERVICEABLE'"); },
+                ThrowsMessage<DbError>(HasSubstr("append-only record: test_sessions rows are never updated")));
+    EXPECT_EQ(row_counts(db).at("findings"), 1) << "nothing was deleted";
 }
 
 struct BadSession {
@@ -330,7 +340,7 @@ INSTANTIATE_TEST_SUITE_P(
     TestSessionStore, InvalidSession,
     ::testing::Values(
         BadSession{"BadPhase", [](auto& s) { s.phase = "mid-flight"; },
-                   "test session: phase is 'mid-flight': use 'pre-flight' or 'post-flight'"},
+                   "test session: phase is 'mid-flight': use 'pre-flight', 'post-flight', 'in-flight' or 'load-rig'"},
         BadSession{"BadVerdict", [](auto& s) { s.verdict = "OK"; },
                    "test session: verdict is 'OK': use 'SERVICEABLE', 'UNSERVICEABLE', 'INCONCLUSIVE' or 'NO_TEST'"},
         BadSession{"BadTail",
@@ -427,7 +437,7 @@ TEST(Database, RefusesADatabaseOneVersionNewerThanTheCode) {
         db.exec("PRAGMA user_version = " + std::to_string(kNewestSchemaVersion + 1));
     }
     EXPECT_THAT([&] { Database db(file.path()); },
-                ThrowsMessage<DbError>(HasSubstr("has schema version 3, newer than this emadiag understands (2)")));
+                ThrowsMessage<DbError>(HasSubstr("has schema version 5, newer than this emadiag understands (4)")));
     RawConnection raw(file.path());
     EXPECT_EQ(raw.query_int("PRAGMA user_version"), kNewestSchemaVersion + 1) << "never downgraded";
     EXPECT_EQ(raw.query_int("SELECT count(*) FROM test_sessions"), 1);
