@@ -144,7 +144,7 @@ void Database::exec(std::string_view sql) {
         sqlite3_free(err);
         const DbErrorKind kind = kind_of(rc);
         const std::string cause = cause_of(kind, busy_timeout_ms_);
-        throw DbError("SQL failed on " + path_ + ": " + (cause.empty() ? "" : cause + ": ") + msg + " in: " + text.substr(0, 120), kind);
+        throw DbError("database " + path_ + ": " + (cause.empty() ? "SQL failed: " : cause + ": ") + msg + " in: " + text.substr(0, 120), kind);
     }
 }
 

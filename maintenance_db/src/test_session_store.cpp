@@ -265,6 +265,7 @@ public:
         h_.update(head).update(v).update("\n");
     }
     void number(std::string_view name, double v) {
+        if (v == 0) v = 0.0;  // SQLite stores -0.0 as the integer 0: hash both as "0"
         char buf[64];
         const auto r = std::to_chars(buf, buf + sizeof buf, v);  // shortest form that reads back exactly
         text(name, std::string_view(buf, static_cast<std::size_t>(r.ptr - buf)));
