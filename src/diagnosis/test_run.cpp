@@ -73,6 +73,8 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
             if (options.sequences[i] == options.sequences[j])
                 throw EmadiagError("test sequence " + sequence_name(options.sequences[i]) + " is listed twice");
     db::check_tail_number(options.tail_number);
+    db::StoredTestSession s;
+    set_record_info(s, options.record);  // an unknown position, bad cycles or hours: nothing moves
     // Open (create, migrate) the database before anything moves: a test must never end unstorable.
     db::Database database(options.db_path);
     std::error_code ec;
@@ -158,17 +160,29 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
         result.assessment = assess(assessed, options.limits);  // the loop stops early only at an invalid run: NO_TEST
     }
 
-    db::StoredTestSession s;
     s.tail_number = options.tail_number;
     s.actuator_serial = result.actuator_serial;
     s.phase = options.phase;
     s.started_utc = result.started_utc;
     s.tool_version = options.tool_version;
     s.limits_json = options.limits.to_json().dump();
-    for (const auto& r : result.runs) s.runs.push_back(to_stored(r, options.tail_number, result.started_utc));
+    s.source = "test-run";
+    std::string done;
+    for (const auto& r : result.runs) {
+        s.runs.push_back(to_stored(r, options.tail_number, result.started_utc));
+        if (r.estimates) add_model_artifacts(s, r.estimates->model_files);
+        done += (done.empty() ? "" : ", ") + r.sequence;
+    }
+    s.work_performed = "ground test run over CAN (" + options.phase + "): " + (done.empty() ? std::string("no sequence") : done) +
+                       "; estimates (physics, network) and verdict " + std::string(to_string(result.assessment.verdict));
     set_assessment(s, result.assessment);
-    result.db_session_id = db::store_test_session(database, s);
-    say("stored as test session " + std::to_string(result.db_session_id) + " of " + options.tail_number + " in " + options.db_path);
+    const db::SessionReceipt receipt = db::store_session(database, s);
+    result.db_session_id = receipt.session_id;
+    result.content_sha256 = receipt.content_sha256;
+    result.installation = receipt.installation;
+    say("stored as test session " + std::to_string(result.db_session_id) + " of " + options.tail_number +
+        (s.position ? " at " + *s.position : std::string()) + " in " + options.db_path + " (chain " + receipt.content_sha256.substr(0, 16) + ")");
+    if (receipt.installation) say(describe_installation(*receipt.installation));
     if (failure) throw EmadiagError(*failure + " (the " + std::to_string(result.runs.size()) + " run(s) before it are stored as test session " +
                                     std::to_string(result.db_session_id) + ", verdict NO_TEST)");
     return result;

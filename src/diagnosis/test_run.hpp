@@ -12,6 +12,7 @@
 // An aborted or invalid run ends the session as NO_TEST; its logs are stored all the same.
 #include "can_tool/recorder.hpp"
 #include "diagnosis/health_limits.hpp"
+#include "diagnosis/session_storage.hpp"
 #include "diagnosis/verdict.hpp"
 
 #include "emadiag/can/can_bus.hpp"
@@ -42,6 +43,9 @@ struct TestRunOptions {
     std::uint16_t first_session_id = 1;  ///< START_SEQUENCE session ids: this, this + 1, ...
     std::chrono::milliseconds answer_timeout{500};
     std::string tool_version;
+    /// Position, cycles, hours, operator, technician and certificate for the record (checked first:
+    /// an unknown position is an error before anything moves).
+    SessionRecordInfo record;
     /// Progress lines for the technician (libraries never print; the CLI passes them to stdout).
     std::function<void(const std::string&)> on_progress;
 };
@@ -61,6 +65,8 @@ struct TestRunResult {
     std::vector<TestRunRecord> runs;
     Assessment assessment;
     bool interrupted = false;
+    std::string content_sha256;  ///< the stored session's link in the tail's hash chain
+    std::optional<db::StoredInstallation> installation;  ///< when the position showed a new serial
 };
 
 /// Runs the session. Throws EmadiagError (after keeping the logs written so far on disk) when the
