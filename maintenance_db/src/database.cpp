@@ -16,6 +16,8 @@ constexpr char kSqliteHeader[] = "SQLite format 3";  // + its NUL: 16 bytes
 constexpr std::size_t kSqliteHeaderBytes = 16;
 /// The schema version whose migration is followed by the sealing of earlier sessions (hash chain).
 constexpr int kSealVersion = 3;
+/// The page cache of a connection, KiB.
+constexpr int kCacheSizeKiB = 256 * 1024;
 
 DbErrorKind kind_of(int rc) {
     switch (rc & 0xff) {
@@ -84,6 +86,9 @@ Database::Database(const std::string& path, int busy_timeout_ms, bool quick_chec
         exec("PRAGMA foreign_keys = OFF");
         migrate();
         exec("PRAGMA foreign_keys = ON");
+        // A session's transaction (or a bulk import's) stays in memory until COMMIT: without room
+        // SQLite spills pages to the file mid-transaction, syncing the journal each time.
+        exec("PRAGMA cache_size = " + std::to_string(-kCacheSizeKiB));
     } catch (...) {
         // The destructor does not run for a constructor that throws: close the connection here.
         cache_.clear();

@@ -13,6 +13,7 @@
 #include <charconv>
 #include <cmath>
 #include <map>
+#include <unordered_map>
 #include <string_view>
 
 namespace emadiag::db {
@@ -224,7 +225,7 @@ std::vector<StoredArtifact> load_artifacts(Database& db, std::int64_t session_id
 /// artifacts and runs without samples: one query per table, not per session.
 std::vector<StoredTestSession> list_where(Database& db, const std::string& where, const std::string& value) {
     std::vector<StoredTestSession> out;
-    std::map<std::int64_t, std::size_t> index;
+    std::unordered_map<std::int64_t, std::size_t> index;
     {
         Statement st(db, std::string("SELECT ") + kSessionColumns + " WHERE " + where + " ORDER BY s.started_utc, s.session_id");
         st.bind(1, value);
@@ -236,10 +237,13 @@ std::vector<StoredTestSession> list_where(Database& db, const std::string& where
     if (out.empty()) return out;
     {
         Statement st(db, std::string("SELECT f.session_id, ") + kFindingColumns +
-                             " FROM test_sessions s JOIN findings f ON f.session_id = s.session_id WHERE " + where +
-                             " ORDER BY f.session_id, f.parameter, f.estimator");
+                             " FROM test_sessions s JOIN findings f ON f.session_id = s.session_id WHERE " + where);
         st.bind(1, value);
         while (st.step()) out[index.at(st.column_int(0))].findings.push_back(read_finding(st, 1));
+        // In the order load_test_session gives (no ORDER BY: sorting every finding of a tail in SQL costs more).
+        for (auto& s : out)
+            std::sort(s.findings.begin(), s.findings.end(),
+                      [](const auto& a, const auto& b) { return std::tie(a.parameter, a.estimator) < std::tie(b.parameter, b.estimator); });
     }
     {
         Statement st(db, "SELECT a.session_id, a.role, a.name, a.sha256 FROM test_sessions s JOIN session_artifacts a ON a.session_id = "
@@ -517,12 +521,11 @@ std::string session_content_sha256(const StoredTestSession& s, const std::string
     return h.hex();
 }
 
-SessionReceipt store_session(Database& db, const StoredTestSession& session) {
-    check_session(session);
+namespace {
+/// Writes one checked session inside the caller's open transaction.
+SessionReceipt insert_session(Database& db, const StoredTestSession& session) {
     StoredTestSession s = session;
     s.limits_sha256 = sha256_hex(s.limits_json);
-
-    Transaction tx(db);
     db.cached("INSERT OR IGNORE INTO aircraft(tail_number) VALUES (?)").bind(1, s.tail_number).run();
     if (s.position) register_position(db, s);
     std::optional<StoredTestSession> amended;
@@ -609,8 +612,33 @@ SessionReceipt store_session(Database& db, const StoredTestSession& session) {
     set_chain_head(db, s.tail_number, receipt.session_id, s.content_sha256);
     if (amended) add_to_summaries(db, *amended, amended->session_id, -1);
     add_to_summaries(db, s, receipt.session_id, +1);
+    return receipt;
+}
+}  // namespace
+
+SessionReceipt store_session(Database& db, const StoredTestSession& session) {
+    check_session(session);
+    Transaction tx(db);
+    SessionReceipt receipt = insert_session(db, session);
     tx.commit();
     return receipt;
+}
+
+std::vector<SessionReceipt> store_sessions(Database& db, const std::vector<StoredTestSession>& sessions) {
+    for (std::size_t i = 0; i < sessions.size(); ++i) {
+        try {
+            check_session(sessions[i]);
+        } catch (const DbError& e) {
+            throw DbError("batch session " + std::to_string(i) + ": " + std::string(e.what()).substr(std::string("[maintenance_db] ").size()),
+                          e.kind());
+        }
+    }
+    std::vector<SessionReceipt> out;
+    out.reserve(sessions.size());
+    Transaction tx(db);
+    for (const auto& s : sessions) out.push_back(insert_session(db, s));
+    tx.commit();
+    return out;
 }
 
 std::int64_t store_test_session(Database& db, const StoredTestSession& session) { return store_session(db, session).session_id; }

@@ -22,62 +22,74 @@ std::string in_cycles(std::string s) {
     return s;
 }
 
-/// The actuator's cycles at each session: aircraft cycles since the series' first session, summed
-/// over the tails it was on (the cycles between removal and installation are not known: none).
-std::vector<std::optional<double>> actuator_cycles(const std::vector<db::StoredTestSession>& sessions) {
-    std::vector<std::optional<double>> out;
-    double total = 0;
-    const db::StoredTestSession* prev = nullptr;
-    for (const auto& s : sessions) {
-        if (!s.cycles) {
-            out.emplace_back();
-            continue;
-        }
-        if (prev && prev->tail_number == s.tail_number) total += static_cast<double>(*s.cycles - *prev->cycles);
-        out.emplace_back(total);
-        prev = &s;
-    }
-    return out;
+/// What a trend needs of a session (build_series reads the id, the time and the findings): a
+/// light copy, so that the views do not copy every session's record text.
+db::StoredTestSession light(const db::StoredTestSession& s) {
+    db::StoredTestSession l;
+    l.session_id = s.session_id;
+    l.started_utc = s.started_utc;
+    l.findings = s.findings;
+    return l;
 }
 
-ParameterHistory analyse(const std::vector<db::StoredTestSession>& sessions, const std::string& parameter, const FleetRecordOptions& o) {
+/// The sessions of a view on both axes, prepared once for its four parameters.
+struct ViewAxes {
+    std::vector<db::StoredTestSession> sessions, with_cycles;
+    std::vector<double> days, cycle_axis;
+    double origin_days = 0;
+};
+
+ParameterHistory analyse(const ViewAxes& v, const std::string& parameter, const FleetRecordOptions& o) {
     ParameterHistory h;
     h.parameter = parameter;
-    const std::vector<double> days = session_days(sessions);
-    const auto cycles = actuator_cycles(sessions);
-    std::vector<db::StoredTestSession> with_cycles;
-    std::vector<double> cycle_axis;
-    for (std::size_t i = 0; i < sessions.size(); ++i) {
-        if (!cycles[i]) continue;
-        with_cycles.push_back(sessions[i]);
-        cycle_axis.push_back(*cycles[i]);
-    }
-    if (!with_cycles.empty()) {
+    if (!v.with_cycles.empty()) {
         RulOptions r = o.rul;
         r.horizon_days = o.horizon_cycles;
-        AxisTrend a{kAxisCycles, analyse_parameter(build_series(with_cycles, cycle_axis, parameter, 0.0), r)};
+        AxisTrend a{kAxisCycles, analyse_parameter(build_series(v.with_cycles, v.cycle_axis, parameter, 0.0), r)};
         a.trend.rul.summary = in_cycles(a.trend.rul.summary);
-        if (with_cycles.size() < sessions.size())
-            a.trend.series.notes.push_back(std::to_string(sessions.size() - with_cycles.size()) + " session(s) without cycles left out of the cycles axis");
+        if (v.with_cycles.size() < v.sessions.size())
+            a.trend.series.notes.push_back(std::to_string(v.sessions.size() - v.with_cycles.size()) +
+                                           " session(s) without cycles left out of the cycles axis");
         h.axes.push_back(std::move(a));
     }
-    const double origin = days.empty() ? 0.0 : *std::min_element(days.begin(), days.end());
-    AxisTrend d{kAxisDays, analyse_parameter(build_series(sessions, days, parameter, origin), o.rul)};
-    if (d.trend.rul.crossing_t_days) d.trend.crossing_days_since_epoch = origin + *d.trend.rul.crossing_t_days;
+    AxisTrend d{kAxisDays, analyse_parameter(build_series(v.sessions, v.days, parameter, v.origin_days), o.rul)};
+    if (d.trend.rul.crossing_t_days) d.trend.crossing_days_since_epoch = v.origin_days + *d.trend.rul.crossing_t_days;
     h.axes.push_back(std::move(d));
-    h.preferred_axis = !with_cycles.empty() && with_cycles.size() == sessions.size() ? kAxisCycles : kAxisDays;
+    h.preferred_axis = !v.with_cycles.empty() && v.with_cycles.size() == v.sessions.size() ? kAxisCycles : kAxisDays;
     return h;
 }
 
-void fill_trends(HistoryView& v, const std::vector<db::StoredTestSession>& trend_sessions, const FleetRecordOptions& o) {
+void fill_trends(HistoryView& v, const std::vector<const db::StoredTestSession*>& trend_sessions, const FleetRecordOptions& o) {
     std::vector<db::StoredTestSession> picked;
-    for (const auto& s : trend_sessions)
-        if (o.phase == kPhaseAll || s.phase == o.phase) picked.push_back(s);
-    for (const auto& s : picked) v.trend_session_ids.push_back(s.session_id);
+    picked.reserve(trend_sessions.size());
+    std::vector<std::optional<std::int64_t>> cycles;
+    std::vector<std::string> tails;
+    for (const auto* s : trend_sessions) {
+        if (o.phase != kPhaseAll && s->phase != o.phase) continue;
+        picked.push_back(light(*s));
+        cycles.push_back(s->cycles);
+        tails.push_back(s->tail_number);
+        v.trend_session_ids.push_back(s->session_id);
+    }
     if (picked.size() < trend_sessions.size())
         v.notes.push_back(std::to_string(trend_sessions.size() - picked.size()) + " session(s) of another phase than " + o.phase +
                           " left out of the trends");
-    for (const char* p : {kParamFdj, kParamFsj, kParamEtaO, kParamEtaA}) v.parameters.push_back(analyse(picked, p, o));
+    ViewAxes axes;
+    axes.days = session_days(picked);
+    axes.origin_days = axes.days.empty() ? 0.0 : *std::min_element(axes.days.begin(), axes.days.end());
+    // The actuator's cycles: aircraft cycles since the view's first session, summed over the tails it
+    // was on (the cycles between a removal and the next installation are not known: none).
+    double total = 0;
+    std::optional<std::size_t> prev;
+    for (std::size_t i = 0; i < picked.size(); ++i) {
+        if (!cycles[i]) continue;
+        if (prev && tails[*prev] == tails[i]) total += static_cast<double>(*cycles[i] - *cycles[*prev]);
+        prev = i;
+        axes.with_cycles.push_back(picked[i]);
+        axes.cycle_axis.push_back(total);
+    }
+    axes.sessions = std::move(picked);
+    for (const char* p : {kParamFdj, kParamFsj, kParamEtaO, kParamEtaA}) v.parameters.push_back(analyse(axes, p, o));
 }
 
 json optional_number(const std::optional<double>& v) { return v ? json(*v) : json(nullptr); }
@@ -234,9 +246,9 @@ FleetRecord build_fleet_record(db::Database& database, const std::string& tail_n
         v.last_verdict = sessions.back().verdict;
         for (const auto& i : r.installations)
             if (i.position == position) v.installations.push_back(i);
-        std::vector<db::StoredTestSession> trend;
+        std::vector<const db::StoredTestSession*> trend;
         for (const auto& s : sessions)
-            if (s.actuator_serial == v.current_serial) trend.push_back(s);
+            if (s.actuator_serial == v.current_serial) trend.push_back(&s);
         if (trend.size() < sessions.size())
             v.notes.push_back("trends are those of serial " + (v.current_serial.empty() ? std::string("(unknown)") : v.current_serial) +
                               ", installed now: " + std::to_string(sessions.size() - trend.size()) +
@@ -255,14 +267,23 @@ FleetRecord build_fleet_record(db::Database& database, const std::string& tail_n
         v.key = serial;
         std::vector<db::StoredTestSession> sessions;
         std::set<std::int64_t> amended_here;
-        const auto of_serial = db::list_sessions_of_serial(database, serial);
+        v.installations = db::list_installations_of_serial(database, serial);
+        db::Statement elsewhere(database, "SELECT 1 FROM test_sessions WHERE actuator_serial = ? AND tail_number != ? LIMIT 1");
+        elsewhere.bind(1, serial).bind(2, tail_number);
+        const bool only_here = !elsewhere.step();
+        std::vector<db::StoredTestSession> of_serial;
+        if (only_here) {
+            for (const auto& s : all)
+                if (s.actuator_serial == serial) of_serial.push_back(s);
+        } else {
+            of_serial = db::list_sessions_of_serial(database, serial);
+        }
         for (const auto& s : of_serial)
             if (s.amends_session_id) amended_here.insert(*s.amends_session_id);
         for (const auto& s : of_serial)
             if (!amended_here.count(s.session_id)) sessions.push_back(s);
         v.current_place = sessions.back().tail_number + " " + sessions.back().position.value_or(kNoPosition);
         v.last_verdict = sessions.back().verdict;
-        v.installations = db::list_installations_of_serial(database, serial);
         std::set<std::string> places;
         for (const auto& s : sessions) places.insert(s.tail_number + " " + s.position.value_or(kNoPosition));
         if (places.size() > 1) {
@@ -270,7 +291,21 @@ FleetRecord build_fleet_record(db::Database& database, const std::string& tail_n
             for (const auto& p : places) list += (list.empty() ? "" : ", ") + p;
             v.notes.push_back("installed at " + std::to_string(places.size()) + " places: " + list);
         }
-        fill_trends(v, sessions, options);
+        // A serial that never left one position has that position's trends: computed once.
+        const HistoryView* same = nullptr;
+        std::vector<std::int64_t> ids;
+        for (const auto& s : sessions)
+            if (options.phase == kPhaseAll || s.phase == options.phase) ids.push_back(s.session_id);
+        for (const auto& pv : r.positions)
+            if (pv.trend_session_ids == ids) same = &pv;
+        if (same != nullptr) {
+            v.trend_session_ids = ids;
+            v.parameters = same->parameters;
+        } else {
+            std::vector<const db::StoredTestSession*> ptrs;
+            for (const auto& s : sessions) ptrs.push_back(&s);
+            fill_trends(v, ptrs, options);
+        }
         v.sessions = std::move(sessions);
         r.serials.push_back(std::move(v));
     }

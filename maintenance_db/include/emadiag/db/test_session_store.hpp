@@ -85,6 +85,10 @@ struct SessionReceipt {
 /// Stores the session like store_test_session and says what it did.
 [[nodiscard]] SessionReceipt store_session(Database& db, const StoredTestSession& session);
 
+/// Stores many sessions in ONE transaction (bulk import, e.g. from another maintenance system):
+/// all of them or none. Each is checked first; DbError names the batch index.
+[[nodiscard]] std::vector<SessionReceipt> store_sessions(Database& db, const std::vector<StoredTestSession>& sessions);
+
 /// Stores the session, all its runs (samples, raw logs, estimates) and findings in ONE transaction;
 /// returns the session id. On any invalid field nothing at all is written; DbError names the field
 /// (and run / finding index). Every run's tail_number must equal the session's.
