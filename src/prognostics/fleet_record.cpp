@@ -213,15 +213,12 @@ FleetRecord build_fleet_record(db::Database& database, const std::string& tail_n
     r.tail_number = tail_number;
     r.database = database.path();
     r.options = options;
-    const auto all = db::list_test_sessions(database, tail_number);
+    auto all = db::list_test_sessions(database, tail_number);
     r.sessions_total = static_cast<std::int64_t>(all.size());
     std::set<std::int64_t> amended;
     for (const auto& s : all)
         if (s.amends_session_id) amended.insert(*s.amends_session_id);
     r.amended_session_ids.assign(amended.begin(), amended.end());
-    std::vector<db::StoredTestSession> current;
-    for (const auto& s : all)
-        if (!amended.count(s.session_id)) current.push_back(s);
     {
         std::int64_t newest = -1;
         for (const auto& s : all)
@@ -230,6 +227,11 @@ FleetRecord build_fleet_record(db::Database& database, const std::string& tail_n
                 r.chain_head_sha256 = s.content_sha256;
             }
     }
+    std::vector<db::StoredTestSession> current;
+    current.reserve(all.size());
+    for (auto& s : all)
+        if (!amended.count(s.session_id)) current.push_back(std::move(s));
+    all.clear();
     r.installations = db::list_installations(database, tail_number);
     r.open_findings = db::list_discovery_findings(database, tail_number, true);
 
@@ -273,15 +275,15 @@ FleetRecord build_fleet_record(db::Database& database, const std::string& tail_n
         const bool only_here = !elsewhere.step();
         std::vector<db::StoredTestSession> of_serial;
         if (only_here) {
-            for (const auto& s : all)
+            for (const auto& s : current)
                 if (s.actuator_serial == serial) of_serial.push_back(s);
         } else {
             of_serial = db::list_sessions_of_serial(database, serial);
         }
         for (const auto& s : of_serial)
             if (s.amends_session_id) amended_here.insert(*s.amends_session_id);
-        for (const auto& s : of_serial)
-            if (!amended_here.count(s.session_id)) sessions.push_back(s);
+        for (auto& s : of_serial)
+            if (!amended_here.count(s.session_id)) sessions.push_back(std::move(s));
         v.current_place = sessions.back().tail_number + " " + sessions.back().position.value_or(kNoPosition);
         v.last_verdict = sessions.back().verdict;
         std::set<std::string> places;
