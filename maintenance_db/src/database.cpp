@@ -1,43 +1,155 @@
 #include "emadiag/db/database.hpp"
 
 #include "emadiag/db/db_error.hpp"
+#include "record_detail.hpp"
 #include "schema_sql.hpp"
 
 #include <sqlite3.h>
 
+#include <fstream>
+
 namespace emadiag::db {
 
-Database::Database(const std::string& path, int busy_timeout_ms) : path_(path) {
+namespace {
+/// The first 16 bytes of every SQLite 3 database file (sqlite.org/fileformat.html, section 1.3.1).
+constexpr char kSqliteHeader[] = "SQLite format 3";  // + its NUL: 16 bytes
+constexpr std::size_t kSqliteHeaderBytes = 16;
+/// The schema version whose migration is followed by the sealing of earlier sessions (hash chain).
+constexpr int kSealVersion = 3;
+/// The page cache of a connection, KiB.
+constexpr int kCacheSizeKiB = 256 * 1024;
+
+DbErrorKind kind_of(int rc) {
+    switch (rc & 0xff) {
+        case SQLITE_BUSY:
+        case SQLITE_LOCKED: return DbErrorKind::Busy;
+        case SQLITE_FULL: return DbErrorKind::Full;
+        case SQLITE_CORRUPT:
+        case SQLITE_NOTADB: return DbErrorKind::Corrupt;
+        case SQLITE_READONLY:
+        case SQLITE_CANTOPEN:
+        case SQLITE_PERM: return DbErrorKind::ReadOnly;
+        case SQLITE_CONSTRAINT:
+        case SQLITE_MISMATCH:
+        case SQLITE_RANGE: return DbErrorKind::Invalid;
+        default: return DbErrorKind::Other;
+    }
+}
+
+std::string cause_of(DbErrorKind kind, int busy_timeout_ms) {
+    switch (kind) {
+        case DbErrorKind::Busy:
+            return "locked by another writer (waited the busy timeout of " + std::to_string(busy_timeout_ms) + " ms); nothing was written";
+        case DbErrorKind::Full: return "the disk is full; nothing was written";
+        case DbErrorKind::Corrupt: return "the file is corrupt or not an emadiag database";
+        case DbErrorKind::ReadOnly: return "the file or its directory cannot be written";
+        default: return "";
+    }
+}
+}  // namespace
+
+namespace detail {
+void throw_sqlite_error(Database& db, int rc, const std::string& what) {
+    const DbErrorKind kind = kind_of(rc);
+    const std::string cause = cause_of(kind, db.busy_timeout_ms());
+    throw DbError("database " + db.path() + ": " + (cause.empty() ? "" : cause + ": ") + what + ": " + sqlite3_errmsg(db.handle()), kind);
+}
+}  // namespace detail
+
+Database::Database(const std::string& path, int busy_timeout_ms, bool quick_check) : path_(path), busy_timeout_ms_(busy_timeout_ms) {
+    const bool in_memory = path == ":memory:" || path.empty();
+    if (!in_memory) {
+        // The header first: a file that is not SQLite's is refused before SQLite touches it.
+        std::ifstream in(path, std::ios::binary);
+        if (in) {
+            std::string head(kSqliteHeaderBytes, '\0');
+            in.read(head.data(), static_cast<std::streamsize>(head.size()));
+            const auto got = static_cast<std::size_t>(in.gcount());
+            if (got > 0 && (got < kSqliteHeaderBytes || head != std::string(kSqliteHeader, kSqliteHeaderBytes))) {
+                throw DbError("database " + path + " is corrupt or not an SQLite database (its first " + std::to_string(got) +
+                                  " bytes are not the SQLite header); it is left untouched",
+                              DbErrorKind::Corrupt);
+            }
+        }
+    }
     const int rc = sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr);
     if (rc != SQLITE_OK) {
         const std::string msg = db_ != nullptr ? sqlite3_errmsg(db_) : sqlite3_errstr(rc);
         sqlite3_close(db_);
         db_ = nullptr;
-        throw DbError("cannot open database " + path + ": " + msg);
+        throw DbError("cannot open database " + path + ": " + msg, kind_of(rc));
     }
     sqlite3_busy_timeout(db_, busy_timeout_ms);
     try {
-        exec("PRAGMA foreign_keys = ON");
+        if (!in_memory && quick_check) check_before_write();
+        // Off while migrating: version 3 rebuilds test_sessions, which other tables reference.
+        exec("PRAGMA foreign_keys = OFF");
         migrate();
+        exec("PRAGMA foreign_keys = ON");
+        // A session's transaction (or a bulk import's) stays in memory until COMMIT: without room
+        // SQLite spills pages to the file mid-transaction, syncing the journal each time.
+        exec("PRAGMA cache_size = " + std::to_string(-kCacheSizeKiB));
     } catch (...) {
         // The destructor does not run for a constructor that throws: close the connection here.
+        cache_.clear();
         sqlite3_close(db_);
         db_ = nullptr;
         throw;
     }
 }
 
-Database::~Database() { sqlite3_close(db_); }
+Database::~Database() {
+    cache_.clear();  // finalize before closing
+    sqlite3_close(db_);
+}
+
+Statement& Database::cached(const std::string& sql) {
+    auto it = cache_.find(sql);
+    if (it == cache_.end()) it = cache_.emplace(sql, std::make_unique<Statement>(*this, sql)).first;
+    it->second->reset();
+    return *it->second;
+}
 
 std::string Database::error_text() const { return std::string(sqlite3_errmsg(db_)) + " (" + path_ + ")"; }
+
+void Database::check_before_write() {
+    sqlite3_stmt* st = nullptr;
+    int rc = sqlite3_prepare_v2(db_, "PRAGMA quick_check", -1, &st, nullptr);
+    std::string problems;
+    int lines = 0;
+    while (rc == SQLITE_OK || rc == SQLITE_ROW) {
+        rc = sqlite3_step(st);
+        if (rc != SQLITE_ROW) break;
+        const auto* text = reinterpret_cast<const char*>(sqlite3_column_text(st, 0));
+        const std::string line = text != nullptr ? text : "";
+        if (line == "ok") continue;
+        if (++lines <= 3) problems += (problems.empty() ? "" : "; ") + line;
+    }
+    const std::string err = sqlite3_errmsg(db_);
+    sqlite3_finalize(st);
+    if (rc != SQLITE_DONE && rc != SQLITE_OK) {
+        const DbErrorKind kind = kind_of(rc) == DbErrorKind::Other ? DbErrorKind::Corrupt : kind_of(rc);
+        throw DbError("database " + path_ + " cannot be checked before use (" + cause_of(kind, busy_timeout_ms_) + "): " + err +
+                          "; it is left untouched",
+                      kind);
+    }
+    if (lines > 0) {
+        throw DbError("database " + path_ + " is corrupt (PRAGMA quick_check: " + problems + (lines > 3 ? "; ..." : "") +
+                          "); it is left untouched: restore it from a backup",
+                      DbErrorKind::Corrupt);
+    }
+}
 
 void Database::exec(std::string_view sql) {
     char* err = nullptr;
     const std::string text(sql);
-    if (sqlite3_exec(db_, text.c_str(), nullptr, nullptr, &err) != SQLITE_OK) {
+    const int rc = sqlite3_exec(db_, text.c_str(), nullptr, nullptr, &err);
+    if (rc != SQLITE_OK) {
         const std::string msg = err != nullptr ? err : "unknown error";
         sqlite3_free(err);
-        throw DbError("SQL failed on " + path_ + ": " + msg + " in: " + text.substr(0, 120));
+        const DbErrorKind kind = kind_of(rc);
+        const std::string cause = cause_of(kind, busy_timeout_ms_);
+        throw DbError("database " + path_ + ": " + (cause.empty() ? "SQL failed: " : cause + ": ") + msg + " in: " + text.substr(0, 120), kind);
     }
 }
 
@@ -59,7 +171,14 @@ void Database::migrate() {
     for (int v = have; v < newest; ++v) {
         Transaction tx(*this);
         exec(kSchemaMigrations[v]);
+        if (v + 1 == kSealVersion) detail::seal_sessions_before_v3(*this);
         exec("PRAGMA user_version = " + std::to_string(v + 1));
+        if (v + 1 == newest) {
+            Statement fk(*this, "PRAGMA foreign_key_check");
+            if (fk.step())
+                throw DbError("database " + path_ + ": migration to version " + std::to_string(v + 1) + " left a broken reference in table " +
+                              fk.column_text(0) + "; nothing was changed");
+        }
         tx.commit();
     }
 }
@@ -104,7 +223,7 @@ bool Statement::step() {
     const int rc = sqlite3_step(stmt_);
     if (rc == SQLITE_ROW) return true;
     if (rc == SQLITE_DONE) return false;
-    throw DbError("statement '" + sql_ + "' failed: " + db_.error_text());
+    detail::throw_sqlite_error(db_, rc, "statement '" + sql_.substr(0, 160) + "' failed");
 }
 
 void Statement::run() {

@@ -8,6 +8,7 @@
 
 #include <cctype>
 #include <cmath>
+#include <map>
 #include <utility>
 
 namespace emadiag::db {
@@ -204,6 +205,36 @@ std::vector<StoredRun> detail::session_runs(Database& db, std::int64_t session_i
     std::vector<StoredRun> out;
     while (st.step()) out.push_back(read_run_row(st));
     for (auto& r : out) r.estimates = load_estimates(db, r.run_id);
+    return out;
+}
+
+std::vector<StoredRun> detail::runs_where(Database& db, const std::string& where, const std::string& value) {
+    Statement st(db, "SELECT r.run_id, r.tail_number, r.actuator_serial, r.started_utc, r.source, r.load_case, r.sequence, r.k_t_nm_per_a, "
+                     "r.j_kgm2, r.tau, r.sample_period_s, r.valid, r.status_note, r.meta_json, r.session_id FROM runs r "
+                     "JOIN test_sessions s ON r.session_id = s.session_id WHERE " + where + " ORDER BY r.run_id");
+    st.bind(1, value);
+    std::vector<StoredRun> out;
+    std::map<std::int64_t, std::size_t> index;
+    while (st.step()) {
+        out.push_back(read_run_row(st));
+        index[out.back().run_id] = out.size() - 1;
+    }
+    if (out.empty()) return out;
+    Statement est(db, "SELECT e.run_id, e.estimator, e.parameter, e.value, e.std_error, e.identifiable, e.method, e.note FROM estimates e "
+                      "JOIN runs r ON e.run_id = r.run_id JOIN test_sessions s ON r.session_id = s.session_id WHERE " + where +
+                      " ORDER BY e.run_id, e.estimator, e.parameter");
+    est.bind(1, value);
+    while (est.step()) {
+        StoredEstimate e;
+        e.estimator = est.column_text(1);
+        e.parameter = est.column_text(2);
+        if (!est.column_is_null(3)) e.value = est.column_double(3);
+        e.std_error = est.column_double(4);
+        e.identifiable = est.column_int(5) != 0;
+        e.method = est.column_text(6);
+        e.note = est.column_text(7);
+        out[index.at(est.column_int(0))].estimates.push_back(std::move(e));
+    }
     return out;
 }
 

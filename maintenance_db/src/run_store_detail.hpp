@@ -26,4 +26,8 @@ void check_run(const StoredRun& run, const std::string& context);
 /// samples or raw logs.
 [[nodiscard]] std::vector<StoredRun> session_runs(Database& db, std::int64_t session_id);
 
+/// The runs of the test sessions matching `where` (a condition on test_sessions aliased s, with one
+/// bound text `value`), in run_id order, with their estimates but without samples or raw logs.
+[[nodiscard]] std::vector<StoredRun> runs_where(Database& db, const std::string& where, const std::string& value);
+
 }  // namespace emadiag::db::detail

@@ -1,30 +1,44 @@
 #include "emadiag/db/test_session_store.hpp"
 
 #include "emadiag/db/db_error.hpp"
+#include "emadiag/db/record_store.hpp"
+#include "emadiag/db/sha256.hpp"
 
+#include "record_detail.hpp"
 #include "run_store_detail.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <charconv>
 #include <cmath>
+#include <map>
+#include <unordered_map>
 #include <string_view>
 
 namespace emadiag::db {
 
 namespace {
-// The values the schema's CHECK constraints accept (schema/002_test_sessions.sql); checked here
+// The values the schema's CHECK constraints accept (schema/003_fleet_record.sql); checked here
 // first so that the message names the field and the value.
-constexpr std::array<std::string_view, 2> kPhases{"pre-flight", "post-flight"};
+constexpr std::array<std::string_view, 4> kPhases{"pre-flight", "post-flight", "in-flight", "load-rig"};
 constexpr std::array<std::string_view, 4> kVerdicts{"SERVICEABLE", "UNSERVICEABLE", "INCONCLUSIVE", "NO_TEST"};
 constexpr std::array<std::string_view, 3> kLimitKinds{"max", "min", "none"};
+constexpr std::array<std::string_view, 3> kArtifactRoles{"model", "limits", "positions"};
 constexpr std::string_view kNoLimit = "none";
+constexpr std::size_t kSha256HexDigits = 64;
 /// "YYYY-MM-DDThh:mm:ss": the part of an ISO 8601 time every started_utc begins with ('9' = a digit).
 constexpr std::string_view kIsoDateTimePattern = "9999-99-99T99:99:99";
+/// The tag that starts every session's hashed content (docs/record-format.md).
+constexpr std::string_view kSessionHashTag = "emadiag-session-v1";
+/// Estimators whose findings are measurements (the network findings are the verdict's cross-check).
+constexpr std::string_view kPhysicsPrefix = "physics";
 
 constexpr const char* kSessionColumns =
-    "session_id, tail_number, actuator_serial, phase, started_utc, tool_version, verdict, verdict_note, limits_json "
-    "FROM test_sessions";
+    "s.session_id, s.tail_number, s.actuator_serial, s.phase, s.started_utc, s.tool_version, s.verdict, s.verdict_note, s.limits_json, "
+    "s.position, p.ata_reference, p.description, s.cycles, s.hours_h, s.operator_id, s.technician_name, s.technician_certificate, "
+    "s.work_performed, s.source, s.limits_sha256, s.amends_session_id, s.correction_reason, s.prev_sha256, s.content_sha256 "
+    "FROM test_sessions s LEFT JOIN positions p ON p.position = s.position";
 
 template <std::size_t N>
 std::string one_of(const std::array<std::string_view, N>& allowed) {
@@ -39,7 +53,7 @@ std::string one_of(const std::array<std::string_view, N>& allowed) {
 template <std::size_t N>
 void check_one_of(const std::string& value, const std::array<std::string_view, N>& allowed, const std::string& field) {
     if (std::find(allowed.begin(), allowed.end(), value) == allowed.end()) {
-        throw DbError(field + " is '" + value + "': use " + one_of(allowed));
+        throw DbError(field + " is '" + value + "': use " + one_of(allowed), DbErrorKind::Invalid);
     }
 }
 
@@ -53,56 +67,90 @@ bool is_iso_date_time(const std::string& text) {
     return true;
 }
 
+bool is_sha256_hex(const std::string& s) {
+    return s.size() == kSha256HexDigits &&
+           std::all_of(s.begin(), s.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)) || (c >= 'a' && c <= 'f'); });
+}
+
+void invalid(const std::string& message) { throw DbError(message, DbErrorKind::Invalid); }
+
 void check_optional_finite(const std::optional<double>& v, const std::string& field) {
-    if (v && !std::isfinite(*v)) throw DbError(field + " is not a finite number (" + std::to_string(*v) + ")");
+    if (v && !std::isfinite(*v)) invalid(field + " is not a finite number (" + std::to_string(*v) + ")");
 }
 
 void check_session(const StoredTestSession& s) {
     const std::string where = "test session: ";
-    if (const auto problem = detail::tail_number_problem(s.tail_number)) throw DbError(where + *problem);
+    if (const auto problem = detail::tail_number_problem(s.tail_number)) invalid(where + *problem);
     check_one_of(s.phase, kPhases, where + "phase");
     check_one_of(s.verdict, kVerdicts, where + "verdict");
     if (!is_iso_date_time(s.started_utc)) {
-        throw DbError(where + "started_utc '" + s.started_utc + "' is not an ISO 8601 UTC time (" +
-                      std::string(kIsoDateTimePattern) + "...)");
+        invalid(where + "started_utc '" + s.started_utc + "' is not an ISO 8601 UTC time (" + std::string(kIsoDateTimePattern) + "...)");
+    }
+    if (s.position) {
+        if (const auto problem = position_problem(*s.position)) invalid(where + *problem);
+        if (const auto problem = ata_reference_problem(s.position_ata)) invalid(where + "position " + *s.position + ": " + *problem);
+    }
+    if (s.cycles && *s.cycles < 0) invalid(where + "cycles " + std::to_string(*s.cycles) + " is negative");
+    check_optional_finite(s.hours_h, where + "hours_h");
+    if (s.hours_h && *s.hours_h < 0) invalid(where + "hours_h " + std::to_string(*s.hours_h) + " is negative");
+    if (s.amends_session_id.has_value() == s.correction_reason.empty())
+        invalid(where + (s.amends_session_id ? "a correction (amends session " + std::to_string(*s.amends_session_id) + ") needs a reason"
+                                             : std::string("correction_reason '") + s.correction_reason + "' without amends_session_id"));
+    for (std::size_t i = 0; i < s.artifacts.size(); ++i) {
+        const auto& a = s.artifacts[i];
+        const std::string context = where + "artifact " + std::to_string(i) + " (" + a.name + "): ";
+        check_one_of(a.role, kArtifactRoles, context + "role");
+        if (a.name.empty()) invalid(context + "name is empty");
+        if (!is_sha256_hex(a.sha256)) invalid(context + "sha256 '" + a.sha256 + "' is not 64 lowercase hex digits");
+        for (std::size_t j = 0; j < i; ++j)
+            if (s.artifacts[j].role == a.role && s.artifacts[j].name == a.name) invalid(context + "duplicate of artifact " + std::to_string(j));
     }
     for (std::size_t i = 0; i < s.runs.size(); ++i) {
         const std::string context = "test session run " + std::to_string(i) + ": ";
         detail::check_run(s.runs[i], context);
         if (s.runs[i].tail_number != s.tail_number) {
-            throw DbError(context + "tail_number '" + s.runs[i].tail_number + "' differs from the session's '" +
-                          s.tail_number + "'");
+            invalid(context + "tail_number '" + s.runs[i].tail_number + "' differs from the session's '" + s.tail_number + "'");
         }
     }
     for (std::size_t i = 0; i < s.findings.size(); ++i) {
         const auto& f = s.findings[i];
         const std::string context = "test session finding " + std::to_string(i) + " (" + f.parameter + "/" + f.estimator + "): ";
-        if (f.parameter.empty()) throw DbError(context + "parameter is empty");
-        if (f.estimator.empty()) throw DbError(context + "estimator is empty");
-        if (f.status.empty()) throw DbError(context + "status is empty");
+        if (f.parameter.empty()) invalid(context + "parameter is empty");
+        if (f.estimator.empty()) invalid(context + "estimator is empty");
+        if (f.status.empty()) invalid(context + "status is empty");
         check_optional_finite(f.value, context + "value");
         check_optional_finite(f.std_error, context + "std_error");
-        if (f.std_error && *f.std_error < 0) {
-            throw DbError(context + "std_error " + std::to_string(*f.std_error) + " is negative");
-        }
+        if (f.std_error && *f.std_error < 0) invalid(context + "std_error " + std::to_string(*f.std_error) + " is negative");
         check_one_of(f.limit_kind, kLimitKinds, context + "limit_kind");
         check_optional_finite(f.limit_value, context + "limit_value");
         if ((f.limit_kind == kNoLimit) == f.limit_value.has_value()) {
-            throw DbError(context + "limit_kind '" + f.limit_kind + "' " +
-                          (f.limit_value ? "with limit_value " + std::to_string(*f.limit_value)
-                                         : std::string("without a limit_value")) +
-                          ": a 'max' or 'min' limit has a value, 'none' has none");
+            invalid(context + "limit_kind '" + f.limit_kind + "' " +
+                    (f.limit_value ? "with limit_value " + std::to_string(*f.limit_value) : std::string("without a limit_value")) +
+                    ": a 'max' or 'min' limit has a value, 'none' has none");
         }
         for (std::size_t j = 0; j < i; ++j) {
             if (s.findings[j].parameter == f.parameter && s.findings[j].estimator == f.estimator) {
-                throw DbError(context + "duplicate of finding " + std::to_string(j) +
-                              ": each (parameter, estimator) is found once per session");
+                invalid(context + "duplicate of finding " + std::to_string(j) + ": each (parameter, estimator) is found once per session");
             }
         }
     }
 }
 
 void bind_optional(Statement& st, int index, const std::optional<double>& v) {
+    if (v) {
+        st.bind(index, *v);
+    } else {
+        st.bind_null(index);
+    }
+}
+void bind_optional(Statement& st, int index, const std::optional<std::int64_t>& v) {
+    if (v) {
+        st.bind(index, *v);
+    } else {
+        st.bind_null(index);
+    }
+}
+void bind_optional(Statement& st, int index, const std::optional<std::string>& v) {
     if (v) {
         st.bind(index, *v);
     } else {
@@ -121,82 +169,517 @@ StoredTestSession read_session_row(const Statement& st) {
     s.verdict = st.column_text(6);
     s.verdict_note = st.column_text(7);
     s.limits_json = st.column_text(8);
+    if (!st.column_is_null(9)) s.position = st.column_text(9);
+    s.position_ata = st.column_text(10);
+    s.position_description = st.column_text(11);
+    if (!st.column_is_null(12)) s.cycles = st.column_int(12);
+    if (!st.column_is_null(13)) s.hours_h = st.column_double(13);
+    s.operator_id = st.column_text(14);
+    s.technician_name = st.column_text(15);
+    s.technician_certificate = st.column_text(16);
+    s.work_performed = st.column_text(17);
+    s.source = st.column_text(18);
+    s.limits_sha256 = st.column_text(19);
+    if (!st.column_is_null(20)) s.amends_session_id = st.column_int(20);
+    s.correction_reason = st.column_text(21);
+    s.prev_sha256 = st.column_text(22);
+    s.content_sha256 = st.column_text(23);
     return s;
 }
 
-std::vector<StoredFinding> load_findings(Database& db, std::int64_t session_id) {
-    Statement st(db, "SELECT parameter, estimator, value, std_error, limit_value, limit_kind, status, note FROM findings "
-                     "WHERE session_id = ? ORDER BY parameter, estimator");
-    st.bind(1, session_id);
-    std::vector<StoredFinding> out;
+StoredFinding read_finding(const Statement& st, int c) {
     const auto optional_column = [&st](int col) {
         return st.column_is_null(col) ? std::nullopt : std::optional<double>(st.column_double(col));
     };
-    while (st.step()) {
-        StoredFinding f;
-        f.parameter = st.column_text(0);
-        f.estimator = st.column_text(1);
-        f.value = optional_column(2);
-        f.std_error = optional_column(3);
-        f.limit_value = optional_column(4);
-        f.limit_kind = st.column_text(5);
-        f.status = st.column_text(6);
-        f.note = st.column_text(7);
-        out.push_back(f);
+    StoredFinding f;
+    f.parameter = st.column_text(c);
+    f.estimator = st.column_text(c + 1);
+    f.value = optional_column(c + 2);
+    f.std_error = optional_column(c + 3);
+    f.limit_value = optional_column(c + 4);
+    f.limit_kind = st.column_text(c + 5);
+    f.status = st.column_text(c + 6);
+    f.note = st.column_text(c + 7);
+    return f;
+}
+
+constexpr const char* kFindingColumns = "f.parameter, f.estimator, f.value, f.std_error, f.limit_value, f.limit_kind, f.status, f.note";
+
+std::vector<StoredFinding> load_findings(Database& db, std::int64_t session_id) {
+    Statement st(db, std::string("SELECT ") + kFindingColumns + " FROM findings f WHERE session_id = ? ORDER BY parameter, estimator");
+    st.bind(1, session_id);
+    std::vector<StoredFinding> out;
+    while (st.step()) out.push_back(read_finding(st, 0));
+    return out;
+}
+
+std::vector<StoredArtifact> load_artifacts(Database& db, std::int64_t session_id) {
+    Statement st(db, "SELECT role, name, sha256 FROM session_artifacts WHERE session_id = ? ORDER BY role, name");
+    st.bind(1, session_id);
+    std::vector<StoredArtifact> out;
+    while (st.step()) out.push_back({st.column_text(0), st.column_text(1), st.column_text(2)});
+    return out;
+}
+
+/// The sessions matching `where` (on alias s, one bound text), oldest first, with findings,
+/// artifacts and runs without samples: one query per table, not per session.
+std::vector<StoredTestSession> list_where(Database& db, const std::string& where, const std::string& value) {
+    std::vector<StoredTestSession> out;
+    std::unordered_map<std::int64_t, std::size_t> index;
+    {
+        Statement st(db, std::string("SELECT ") + kSessionColumns + " WHERE " + where + " ORDER BY s.started_utc, s.session_id");
+        st.bind(1, value);
+        while (st.step()) {
+            out.push_back(read_session_row(st));
+            index[out.back().session_id] = out.size() - 1;
+        }
+    }
+    if (out.empty()) return out;
+    {
+        Statement st(db, std::string("SELECT f.session_id, ") + kFindingColumns +
+                             " FROM test_sessions s JOIN findings f ON f.session_id = s.session_id WHERE " + where);
+        st.bind(1, value);
+        while (st.step()) out[index.at(st.column_int(0))].findings.push_back(read_finding(st, 1));
+        // In the order load_test_session gives (no ORDER BY: sorting every finding of a tail in SQL costs more).
+        for (auto& s : out)
+            std::sort(s.findings.begin(), s.findings.end(),
+                      [](const auto& a, const auto& b) { return std::tie(a.parameter, a.estimator) < std::tie(b.parameter, b.estimator); });
+    }
+    {
+        Statement st(db, "SELECT a.session_id, a.role, a.name, a.sha256 FROM test_sessions s JOIN session_artifacts a ON a.session_id = "
+                         "s.session_id WHERE " + where + " ORDER BY a.session_id, a.role, a.name");
+        st.bind(1, value);
+        while (st.step()) out[index.at(st.column_int(0))].artifacts.push_back({st.column_text(1), st.column_text(2), st.column_text(3)});
+    }
+    for (auto& r : detail::runs_where(db, where, value)) {
+        const auto it = index.find(r.session_id.value_or(-1));
+        if (it != index.end()) out[it->second].runs.push_back(std::move(r));
     }
     return out;
 }
+
+// ---- the hash chain (docs/record-format.md, "Hash chain") ----
+
+/// Appends one field as "name:length:bytes\n"; a missing value as "name:-\n".
+class Canon {
+public:
+    explicit Canon(Sha256& h) : h_(h) {}
+    void text(std::string_view name, std::string_view v) {
+        const std::string head = std::string(name) + ":" + std::to_string(v.size()) + ":";
+        h_.update(head).update(v).update("\n");
+    }
+    void number(std::string_view name, double v) {
+        if (v == 0) v = 0.0;  // SQLite stores -0.0 as the integer 0: hash both as "0"
+        char buf[64];
+        const auto r = std::to_chars(buf, buf + sizeof buf, v);  // shortest form that reads back exactly
+        text(name, std::string_view(buf, static_cast<std::size_t>(r.ptr - buf)));
+    }
+    void integer(std::string_view name, std::int64_t v) { text(name, std::to_string(v)); }
+    void none(std::string_view name) { h_.update(std::string(name) + ":-\n"); }
+    void opt(std::string_view name, const std::optional<double>& v) { v ? number(name, *v) : none(name); }
+    void opt(std::string_view name, const std::optional<std::int64_t>& v) { v ? integer(name, *v) : none(name); }
+    void opt(std::string_view name, const std::optional<std::string>& v) { v ? text(name, *v) : none(name); }
+
+private:
+    Sha256& h_;
+};
+
+// ---- the summary tables (series_stats, position_status) ----
+
+int64_t days_from_civil(int y, unsigned m, unsigned d) {
+    // H. Hinnant, "chrono-compatible low-level date algorithms": days since 1970-01-01.
+    y -= m <= 2 ? 1 : 0;
+    const int era = (y >= 0 ? y : y - 399) / 400;
+    const unsigned yoe = static_cast<unsigned>(y - era * 400);
+    const unsigned doy = (153 * (m + (m > 2 ? -3 : 9)) + 2) / 5 + d - 1;
+    const unsigned doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
+    return static_cast<int64_t>(era) * 146097 + static_cast<int64_t>(doe) - 719468;
+}
+
+/// Days since 1970 of "YYYY-MM-DDThh:mm:ss..." (checked by check_session; fractions of a second ignored).
+double utc_days(const std::string& iso) {
+    const auto n = [&](std::size_t at, std::size_t len) { return std::stoi(iso.substr(at, len)); };
+    return static_cast<double>(days_from_civil(n(0, 4), static_cast<unsigned>(n(5, 2)), static_cast<unsigned>(n(8, 2)))) +
+           (n(11, 2) * 3600.0 + n(14, 2) * 60.0 + n(17, 2)) / 86400.0;
+}
+
+/// Adds (sign +1) or removes (sign -1, for a session a correction amends) a session's measurements
+/// in series_stats, and its place in position_status.
+void add_to_summaries(Database& db, const StoredTestSession& s, std::int64_t session_id, int sign) {
+    const double days = utc_days(s.started_utc);
+    const std::string position = s.position.value_or("");
+    Statement& up = db.cached(
+        "INSERT INTO series_stats(tail_number, position, actuator_serial, parameter, n, first_days, last_days, s_w, s_wt, s_wtt, s_wy, "
+        "s_wty, s_wyy, n_cycles, first_cycles, last_cycles, c_w, c_wt, c_wtt, c_wy, c_wty, c_wyy, last_session_id, last_value, "
+        "last_std_error, limit_kind, limit_value) VALUES (?1,?2,?3,?4,?5,?6,?6,?7,0,0,?8,0,?9,?10,?11,?11,?12,0,0,?13,0,?14,?15,?16,?17,?18,?19) "
+        "ON CONFLICT DO UPDATE SET n = n + excluded.n, "
+        "s_w = s_w + excluded.s_w, s_wt = s_wt + excluded.s_w * (excluded.first_days - first_days), "
+        "s_wtt = s_wtt + excluded.s_w * (excluded.first_days - first_days) * (excluded.first_days - first_days), "
+        "s_wy = s_wy + excluded.s_wy, s_wty = s_wty + excluded.s_wy * (excluded.first_days - first_days), s_wyy = s_wyy + excluded.s_wyy, "
+        "n_cycles = n_cycles + excluded.n_cycles, "
+        "c_w = c_w + excluded.c_w, "
+        "c_wt = c_wt + coalesce(excluded.c_w * (excluded.first_cycles - coalesce(first_cycles, excluded.first_cycles)), 0), "
+        "c_wtt = c_wtt + coalesce(excluded.c_w * (excluded.first_cycles - coalesce(first_cycles, excluded.first_cycles)) * "
+        "(excluded.first_cycles - coalesce(first_cycles, excluded.first_cycles)), 0), "
+        "c_wy = c_wy + excluded.c_wy, "
+        "c_wty = c_wty + coalesce(excluded.c_wy * (excluded.first_cycles - coalesce(first_cycles, excluded.first_cycles)), 0), "
+        "c_wyy = c_wyy + excluded.c_wyy, "
+        "first_cycles = coalesce(first_cycles, excluded.first_cycles), "
+        "last_cycles = CASE WHEN excluded.n > 0 AND excluded.last_days >= last_days THEN coalesce(excluded.last_cycles, last_cycles) "
+        "ELSE last_cycles END, "
+        "last_session_id = CASE WHEN excluded.n > 0 AND excluded.last_days >= last_days THEN excluded.last_session_id ELSE last_session_id END, "
+        "last_value = CASE WHEN excluded.n > 0 AND excluded.last_days >= last_days THEN excluded.last_value ELSE last_value END, "
+        "last_std_error = CASE WHEN excluded.n > 0 AND excluded.last_days >= last_days THEN excluded.last_std_error ELSE last_std_error END, "
+        "limit_kind = CASE WHEN excluded.n > 0 AND excluded.last_days >= last_days THEN excluded.limit_kind ELSE limit_kind END, "
+        "limit_value = CASE WHEN excluded.n > 0 AND excluded.last_days >= last_days THEN excluded.limit_value ELSE limit_value END, "
+        "last_days = CASE WHEN excluded.n > 0 THEN max(last_days, excluded.last_days) ELSE last_days END");
+    for (const auto& m : session_measurements(s.findings)) {
+        const double w = sign / (m.std_error * m.std_error);
+        up.reset();
+        up.bind(1, s.tail_number).bind(2, position).bind(3, s.actuator_serial).bind(4, m.parameter);
+        up.bind(5, static_cast<std::int64_t>(sign)).bind(6, days).bind(7, w).bind(8, w * m.value).bind(9, w * m.value * m.value);
+        if (s.cycles) {
+            up.bind(10, static_cast<std::int64_t>(sign)).bind(11, static_cast<double>(*s.cycles)).bind(12, w).bind(13, w * m.value);
+            up.bind(14, w * m.value * m.value);
+        } else {
+            up.bind(10, std::int64_t{0}).bind_null(11).bind(12, 0.0).bind(13, 0.0).bind(14, 0.0);
+        }
+        up.bind(15, session_id).bind(16, m.value).bind(17, m.std_error).bind(18, m.limit_kind);
+        bind_optional(up, 19, m.limit_value);
+        up.run();
+    }
+    if (sign < 0) return;
+    Statement& ps = db.cached(
+        "INSERT INTO position_status(tail_number, position, actuator_serial, sessions, last_session_id, last_utc, last_verdict, last_cycles) "
+        "VALUES (?,?,?,1,?,?,?,?) ON CONFLICT DO UPDATE SET sessions = sessions + 1, "
+        "actuator_serial = CASE WHEN excluded.last_utc >= last_utc THEN excluded.actuator_serial ELSE actuator_serial END, "
+        "last_session_id = CASE WHEN excluded.last_utc >= last_utc THEN excluded.last_session_id ELSE last_session_id END, "
+        "last_verdict = CASE WHEN excluded.last_utc >= last_utc THEN excluded.last_verdict ELSE last_verdict END, "
+        "last_cycles = CASE WHEN excluded.last_utc >= last_utc THEN coalesce(excluded.last_cycles, last_cycles) ELSE last_cycles END, "
+        "last_utc = max(last_utc, excluded.last_utc)");
+    ps.bind(1, s.tail_number).bind(2, position).bind(3, s.actuator_serial).bind(4, session_id).bind(5, s.started_utc).bind(6, s.verdict);
+    bind_optional(ps, 7, s.cycles);
+    ps.run();
+}
+
+void set_chain_head(Database& db, const std::string& tail, std::int64_t session_id, const std::string& sha) {
+    Statement& st = db.cached(
+        "INSERT INTO chain_heads(tail_number, session_id, sessions, content_sha256) VALUES (?,?,1,?) "
+        "ON CONFLICT DO UPDATE SET session_id = excluded.session_id, sessions = sessions + 1, content_sha256 = excluded.content_sha256");
+    st.bind(1, tail).bind(2, session_id).bind(3, sha).run();
+}
+
+std::string chain_head(Database& db, const std::string& tail) {
+    Statement& st = db.cached("SELECT content_sha256 FROM chain_heads WHERE tail_number = ?");
+    st.bind(1, tail);
+    std::string head = st.step() ? st.column_text(0) : "";
+    st.reset();
+    return head;
+}
+
+void register_position(Database& db, const StoredTestSession& s) {
+    Statement& st = db.cached("SELECT ata_reference FROM positions WHERE position = ?");
+    st.bind(1, *s.position);
+    if (st.step()) {
+        const std::string ata = st.column_text(0);
+        st.reset();
+        if (ata != s.position_ata)
+            invalid("position " + *s.position + " is recorded in " + db.path() + " with ATA reference " + ata + ", not " + s.position_ata +
+                    ": a position keeps its ATA reference");
+        return;
+    }
+    st.reset();
+    db.cached("INSERT INTO positions(position, ata_reference, description) VALUES (?,?,?)")
+        .bind(1, *s.position)
+        .bind(2, s.position_ata)
+        .bind(3, s.position_description)
+        .run();
+}
+
 }  // namespace
 
-std::int64_t store_test_session(Database& db, const StoredTestSession& session) {
-    check_session(session);
+std::optional<std::string> position_problem(const std::string& position) {
+    bool ok = !position.empty() && position.size() <= kMaxPositionLength;
+    for (char c : position)
+        ok = ok && (std::isupper(static_cast<unsigned char>(c)) || std::isdigit(static_cast<unsigned char>(c)) || c == '-');
+    if (ok) return std::nullopt;
+    return "position '" + position + "' is not valid: use 1 to " + std::to_string(kMaxPositionLength) + " characters of A-Z, 0-9 and '-'";
+}
 
-    Transaction tx(db);
-    Statement(db, "INSERT OR IGNORE INTO aircraft(tail_number) VALUES (?)").bind(1, session.tail_number).run();
-    Statement ins(db, "INSERT INTO test_sessions(tail_number, actuator_serial, phase, started_utc, tool_version, verdict, "
-                      "verdict_note, limits_json) VALUES (?,?,?,?,?,?,?,?)");
-    ins.bind(1, session.tail_number).bind(2, session.actuator_serial).bind(3, session.phase).bind(4, session.started_utc);
-    ins.bind(5, session.tool_version).bind(6, session.verdict).bind(7, session.verdict_note).bind(8, session.limits_json);
+std::optional<std::string> ata_reference_problem(const std::string& ata) {
+    const bool ok = ata.size() >= 5 && ata.size() <= 16 && ata.compare(0, 3, "27-") == 0 && std::isdigit(static_cast<unsigned char>(ata[3])) &&
+                    std::isdigit(static_cast<unsigned char>(ata[4]));
+    if (ok) return std::nullopt;
+    return "ATA reference '" + ata + "' is not valid: use chapter 27 (flight controls), e.g. 27-30";
+}
+
+std::vector<SessionMeasurement> session_measurements(const std::vector<StoredFinding>& findings) {
+    std::map<std::string, SessionMeasurement> by_parameter;
+    std::map<std::string, double> sum_w, sum_wy;
+    for (const auto& f : findings) {
+        auto& m = by_parameter[f.parameter];
+        m.parameter = f.parameter;
+        if (f.limit_kind != kNoLimit && f.limit_value) {
+            m.limit_kind = f.limit_kind;
+            m.limit_value = f.limit_value;
+        }
+        if (f.estimator.rfind(kPhysicsPrefix, 0) != 0 || !f.value) continue;
+        if (!f.std_error || !(*f.std_error > 0) || !std::isfinite(*f.std_error)) continue;
+        const double w = 1.0 / (*f.std_error * *f.std_error);
+        sum_w[f.parameter] += w;
+        sum_wy[f.parameter] += w * *f.value;
+    }
+    std::vector<SessionMeasurement> out;
+    for (auto& [p, m] : by_parameter) {
+        const double w = sum_w[p];
+        if (!(w > 0)) continue;
+        m.value = sum_wy[p] / w;
+        m.std_error = 1.0 / std::sqrt(w);
+        out.push_back(m);
+    }
+    return out;
+}
+
+std::string session_content_sha256(const StoredTestSession& s, const std::string& prev_sha256) {
+    Sha256 h;
+    h.update(kSessionHashTag).update("\n");
+    Canon c(h);
+    c.text("prev_sha256", prev_sha256);
+    c.text("tail_number", s.tail_number);
+    c.opt("position", s.position);
+    c.text("actuator_serial", s.actuator_serial);
+    c.text("phase", s.phase);
+    c.text("started_utc", s.started_utc);
+    c.opt("cycles", s.cycles);
+    c.opt("hours_h", s.hours_h);
+    c.text("operator_id", s.operator_id);
+    c.text("technician_name", s.technician_name);
+    c.text("technician_certificate", s.technician_certificate);
+    c.text("work_performed", s.work_performed);
+    c.text("source", s.source);
+    c.text("tool_version", s.tool_version);
+    c.text("verdict", s.verdict);
+    c.text("verdict_note", s.verdict_note);
+    c.text("limits_json", s.limits_json);
+    c.text("limits_sha256", s.limits_sha256);
+    c.opt("amends_session_id", s.amends_session_id);
+    c.text("correction_reason", s.correction_reason);
+    auto artifacts = s.artifacts;
+    std::sort(artifacts.begin(), artifacts.end(), [](const auto& a, const auto& b) { return std::tie(a.role, a.name) < std::tie(b.role, b.name); });
+    c.integer("artifacts", static_cast<std::int64_t>(artifacts.size()));
+    for (const auto& a : artifacts) {
+        c.text("role", a.role);
+        c.text("name", a.name);
+        c.text("sha256", a.sha256);
+    }
+    c.integer("runs", static_cast<std::int64_t>(s.runs.size()));
+    for (const auto& r : s.runs) {
+        c.text("run.actuator_serial", r.actuator_serial);
+        c.text("run.started_utc", r.started_utc);
+        c.text("run.source", r.source);
+        c.text("run.load_case", r.load_case);
+        c.text("run.sequence", r.sequence);
+        c.number("run.k_t_nm_per_a", r.k_t_nm_per_a);
+        c.number("run.j_kgm2", r.j_kgm2);
+        c.number("run.tau", r.tau);
+        c.number("run.sample_period_s", r.sample_period_s);
+        c.integer("run.valid", r.valid ? 1 : 0);
+        c.text("run.status_note", r.status_note);
+        c.text("run.meta_json", r.meta_json);
+        c.integer("run.samples", static_cast<std::int64_t>(r.samples.size()));
+        for (const auto& x : r.samples) {
+            for (double v : {x.t_s, x.current_a, x.speed_rad_s, x.theta_m_rad, x.hinge_moment_nm, x.command_deg}) c.number("x", v);
+        }
+        c.text("run.raw_log_format", r.raw_log_format);
+        c.text("run.raw_log_sha256", sha256_hex(r.raw_log));
+        auto est = r.estimates;
+        std::sort(est.begin(), est.end(), [](const auto& a, const auto& b) { return std::tie(a.estimator, a.parameter) < std::tie(b.estimator, b.parameter); });
+        c.integer("run.estimates", static_cast<std::int64_t>(est.size()));
+        for (const auto& e : est) {
+            c.text("estimator", e.estimator);
+            c.text("parameter", e.parameter);
+            c.opt("value", e.value);
+            c.number("std_error", e.std_error);
+            c.integer("identifiable", e.identifiable ? 1 : 0);
+            c.text("method", e.method);
+            c.text("note", e.note);
+        }
+    }
+    auto findings = s.findings;
+    std::sort(findings.begin(), findings.end(), [](const auto& a, const auto& b) { return std::tie(a.parameter, a.estimator) < std::tie(b.parameter, b.estimator); });
+    c.integer("findings", static_cast<std::int64_t>(findings.size()));
+    for (const auto& f : findings) {
+        c.text("parameter", f.parameter);
+        c.text("estimator", f.estimator);
+        c.opt("value", f.value);
+        c.opt("std_error", f.std_error);
+        c.opt("limit_value", f.limit_value);
+        c.text("limit_kind", f.limit_kind);
+        c.text("status", f.status);
+        c.text("note", f.note);
+    }
+    return h.hex();
+}
+
+namespace {
+/// Writes one checked session inside the caller's open transaction.
+SessionReceipt insert_session(Database& db, const StoredTestSession& session) {
+    StoredTestSession s = session;
+    s.limits_sha256 = sha256_hex(s.limits_json);
+    db.cached("INSERT OR IGNORE INTO aircraft(tail_number) VALUES (?)").bind(1, s.tail_number).run();
+    if (s.position) register_position(db, s);
+    std::optional<StoredTestSession> amended;
+    if (s.amends_session_id) {
+        Statement st(db, std::string("SELECT ") + kSessionColumns + " WHERE s.session_id = ?");
+        st.bind(1, *s.amends_session_id);
+        if (!st.step()) invalid("test session: amends session " + std::to_string(*s.amends_session_id) + ", which is not in " + db.path());
+        amended = read_session_row(st);
+        if (amended->tail_number != s.tail_number)
+            invalid("test session: amends session " + std::to_string(*s.amends_session_id) + " of tail " + amended->tail_number +
+                    ", not of " + s.tail_number);
+        Statement again(db, "SELECT session_id FROM test_sessions WHERE amends_session_id = ?");
+        again.bind(1, *s.amends_session_id);
+        if (again.step())
+            invalid("test session: session " + std::to_string(*s.amends_session_id) + " is already amended by session " +
+                    std::to_string(again.column_int(0)) + "; amend that one instead");
+        amended->findings = load_findings(db, amended->session_id);
+    }
+    s.prev_sha256 = chain_head(db, s.tail_number);
+    s.content_sha256 = session_content_sha256(s, s.prev_sha256);
+
+    Statement& ins = db.cached(
+        "INSERT INTO test_sessions(tail_number, actuator_serial, phase, started_utc, tool_version, verdict, verdict_note, limits_json, "
+        "position, cycles, hours_h, operator_id, technician_name, technician_certificate, work_performed, source, limits_sha256, "
+        "amends_session_id, correction_reason, prev_sha256, content_sha256) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
+    ins.bind(1, s.tail_number).bind(2, s.actuator_serial).bind(3, s.phase).bind(4, s.started_utc);
+    ins.bind(5, s.tool_version).bind(6, s.verdict).bind(7, s.verdict_note).bind(8, s.limits_json);
+    bind_optional(ins, 9, s.position);
+    bind_optional(ins, 10, s.cycles);
+    bind_optional(ins, 11, s.hours_h);
+    ins.bind(12, s.operator_id).bind(13, s.technician_name).bind(14, s.technician_certificate).bind(15, s.work_performed);
+    ins.bind(16, s.source).bind(17, s.limits_sha256);
+    bind_optional(ins, 18, s.amends_session_id);
+    ins.bind(19, s.correction_reason).bind(20, s.prev_sha256).bind(21, s.content_sha256);
     ins.run();
-    const std::int64_t id = db.last_insert_id();
+    SessionReceipt receipt;
+    receipt.session_id = db.last_insert_id();
+    receipt.content_sha256 = s.content_sha256;
 
-    for (const auto& run : session.runs) (void)detail::insert_run(db, run, id);
-
-    Statement fnd(db, "INSERT INTO findings(session_id, parameter, estimator, value, std_error, limit_value, limit_kind, "
-                      "status, note) VALUES (?,?,?,?,?,?,?,?,?)");
-    for (const auto& f : session.findings) {
-        fnd.bind(1, id).bind(2, f.parameter).bind(3, f.estimator);
+    for (const auto& run : s.runs) (void)detail::insert_run(db, run, receipt.session_id);
+    Statement& fnd = db.cached(
+        "INSERT INTO findings(session_id, parameter, estimator, value, std_error, limit_value, limit_kind, status, note) "
+        "VALUES (?,?,?,?,?,?,?,?,?)");
+    for (const auto& f : s.findings) {
+        fnd.reset();
+        fnd.bind(1, receipt.session_id).bind(2, f.parameter).bind(3, f.estimator);
         bind_optional(fnd, 4, f.value);
         bind_optional(fnd, 5, f.std_error);
         bind_optional(fnd, 6, f.limit_value);
         fnd.bind(7, f.limit_kind).bind(8, f.status).bind(9, f.note).run();
-        fnd.reset();
     }
+    Statement& art = db.cached("INSERT INTO session_artifacts(session_id, role, name, sha256) VALUES (?,?,?,?)");
+    for (const auto& a : s.artifacts) {
+        art.reset();
+        art.bind(1, receipt.session_id).bind(2, a.role).bind(3, a.name).bind(4, a.sha256).run();
+    }
+    // An installation change: the position shows a serial other than the one installed there so far.
+    if (s.position && !s.actuator_serial.empty()) {
+        Statement& cur = db.cached("SELECT actuator_serial FROM position_status WHERE tail_number = ? AND position = ?");
+        cur.bind(1, s.tail_number).bind(2, *s.position);
+        const std::optional<std::string> installed = cur.step() ? std::optional<std::string>(cur.column_text(0)) : std::nullopt;
+        cur.reset();
+        if (!installed || *installed != s.actuator_serial) {
+            StoredInstallation inst;
+            inst.tail_number = s.tail_number;
+            inst.position = *s.position;
+            inst.from_serial = installed.value_or("");
+            inst.to_serial = s.actuator_serial;
+            inst.detected_utc = s.started_utc;
+            inst.cycles = s.cycles;
+            inst.hours_h = s.hours_h;
+            inst.session_id = receipt.session_id;
+            Statement& ii = db.cached(
+                "INSERT INTO installations(tail_number, position, from_serial, to_serial, detected_utc, cycles, hours_h, session_id) "
+                "VALUES (?,?,?,?,?,?,?,?)");
+            ii.bind(1, inst.tail_number).bind(2, inst.position).bind(3, inst.from_serial).bind(4, inst.to_serial).bind(5, inst.detected_utc);
+            bind_optional(ii, 6, inst.cycles);
+            bind_optional(ii, 7, inst.hours_h);
+            ii.bind(8, inst.session_id).run();
+            inst.installation_id = db.last_insert_id();
+            receipt.installation = inst;
+        }
+    }
+    set_chain_head(db, s.tail_number, receipt.session_id, s.content_sha256);
+    if (amended) add_to_summaries(db, *amended, amended->session_id, -1);
+    add_to_summaries(db, s, receipt.session_id, +1);
+    return receipt;
+}
+}  // namespace
+
+SessionReceipt store_session(Database& db, const StoredTestSession& session) {
+    check_session(session);
+    Transaction tx(db);
+    SessionReceipt receipt = insert_session(db, session);
     tx.commit();
-    return id;
+    return receipt;
 }
 
+std::vector<SessionReceipt> store_sessions(Database& db, const std::vector<StoredTestSession>& sessions) {
+    for (std::size_t i = 0; i < sessions.size(); ++i) {
+        try {
+            check_session(sessions[i]);
+        } catch (const DbError& e) {
+            throw DbError("batch session " + std::to_string(i) + ": " + std::string(e.what()).substr(std::string("[maintenance_db] ").size()),
+                          e.kind());
+        }
+    }
+    std::vector<SessionReceipt> out;
+    out.reserve(sessions.size());
+    Transaction tx(db);
+    for (const auto& s : sessions) out.push_back(insert_session(db, s));
+    tx.commit();
+    return out;
+}
+
+std::int64_t store_test_session(Database& db, const StoredTestSession& session) { return store_session(db, session).session_id; }
+
 StoredTestSession load_test_session(Database& db, std::int64_t session_id) {
-    Statement st(db, std::string("SELECT ") + kSessionColumns + " WHERE session_id = ?");
+    Statement st(db, std::string("SELECT ") + kSessionColumns + " WHERE s.session_id = ?");
     st.bind(1, session_id);
-    if (!st.step()) throw DbError("no test session with id " + std::to_string(session_id) + " in " + db.path());
+    if (!st.step()) throw DbError("no test session with id " + std::to_string(session_id) + " in " + db.path(), DbErrorKind::Invalid);
     StoredTestSession s = read_session_row(st);
     for (const auto& listed : detail::session_runs(db, session_id)) s.runs.push_back(load_run(db, listed.run_id));
     s.findings = load_findings(db, session_id);
+    s.artifacts = load_artifacts(db, session_id);
     return s;
 }
 
 std::vector<StoredTestSession> list_test_sessions(Database& db, const std::string& tail_number) {
     check_tail_number(tail_number);
-    Statement st(db, std::string("SELECT ") + kSessionColumns + " WHERE tail_number = ? ORDER BY started_utc, session_id");
-    st.bind(1, tail_number);
-    std::vector<StoredTestSession> out;
-    while (st.step()) out.push_back(read_session_row(st));
-    for (auto& s : out) {
-        s.runs = detail::session_runs(db, s.session_id);
-        s.findings = load_findings(db, s.session_id);
+    return list_where(db, "s.tail_number = ?", tail_number);
+}
+
+std::vector<StoredTestSession> list_sessions_of_serial(Database& db, const std::string& actuator_serial) {
+    if (actuator_serial.empty()) invalid("an empty actuator serial names no actuator");
+    return list_where(db, "s.actuator_serial = ?", actuator_serial);
+}
+
+void detail::seal_sessions_before_v3(Database& db) {
+    std::vector<std::int64_t> ids;
+    {
+        Statement st(db, "SELECT session_id FROM test_sessions ORDER BY session_id");
+        while (st.step()) ids.push_back(st.column_int(0));
     }
-    return out;
+    for (const auto id : ids) {
+        StoredTestSession s = load_test_session(db, id);
+        s.limits_sha256 = sha256_hex(s.limits_json);
+        s.prev_sha256 = chain_head(db, s.tail_number);
+        s.content_sha256 = session_content_sha256(s, s.prev_sha256);
+        Statement up(db, "UPDATE test_sessions SET limits_sha256 = ?, prev_sha256 = ?, content_sha256 = ? WHERE session_id = ?");
+        up.bind(1, s.limits_sha256).bind(2, s.prev_sha256).bind(3, s.content_sha256).bind(4, id).run();
+        set_chain_head(db, s.tail_number, id, s.content_sha256);
+        add_to_summaries(db, s, id, +1);
+    }
 }
 
 }  // namespace emadiag::db

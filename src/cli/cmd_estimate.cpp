@@ -3,6 +3,7 @@
 // models/ for the run's case and sequence). Text for people; --json is the stable schema of
 // docs/estimate-json.md.
 #include "cli/command.hpp"
+#include "cli/run_file.hpp"
 #include "core/emadiag_error.hpp"
 #include "core/run_csv.hpp"
 #include "can_tool/candump_run.hpp"
@@ -26,18 +27,6 @@ namespace {
 
 /// Version of the --json schema (docs/estimate-json.md).
 constexpr int kEstimateJsonVersion = 1;
-
-bool ends_with(const std::string& s, const std::string& suffix) {
-    return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
-Run read_run_any(const std::string& path) {
-    if (ends_with(path, ".log")) return read_run_candump(path);
-    if (!ends_with(path, ".csv")) {
-        throw EmadiagError(path + ": unknown run format; expected RUN.csv (run CSV) or RUN.log (candump)");
-    }
-    return read_run_csv_file(path);
-}
 
 /// The file line of the first data row of a run CSV (after the `# key=value` lines and the header).
 std::optional<int> first_data_line(const std::string& path) {

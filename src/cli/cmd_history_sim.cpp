@@ -9,6 +9,7 @@
 // session. Runs have source "history-sim"; their meta_json carries the true parameters
 // (true_FDJ_Nm, true_FSJ_Nm, ...). Deterministic for a seed.
 #include "cli/command.hpp"
+#include "cli/record_options.hpp"
 #include "diagnosis/session_storage.hpp"
 
 #include "core/emadiag_error.hpp"
@@ -58,6 +59,10 @@ struct HistorySimOptions {
     std::string noise = "typical";
     std::string phase = kPhasePreFlight;
     std::uint64_t seed = 1;
+    SessionRecordInfo record;        ///< --position etc.; --cycles is the first session's
+    std::string serial;              ///< the simulated actuator's serial (default SIM-<tail>-<position>)
+    double cycles_per_day = 0;       ///< flight cycles flown per day between sessions (0: no cycles recorded)
+    double hours_per_cycle = 1.5;    ///< flight hours per cycle, for the hours counter
 };
 
 /// SplitMix64 (Steele, Lea & Flood 2014): distinct, well-mixed noise seeds per run from one seed.
@@ -102,9 +107,21 @@ const bool registered = register_command(Command{
             ->capture_default_str()
             ->check(CLI::IsMember({kPhasePreFlight, kPhasePostFlight}));
         sub.add_option("--seed", o->seed, "Seed of the sensor noise of every run")->capture_default_str();
+        add_record_options(sub, o->record);
+        sub.add_option("--serial", o->serial, "Actuator serial of the simulated EMA (default SIM-<tail>-<position>)");
+        sub.add_option("--cycles-per-day", o->cycles_per_day, "Flight cycles per day; with it each session records cycles (from --cycles, "
+                       "default 0) and hours")->capture_default_str();
+        sub.add_option("--hours-per-cycle", o->hours_per_cycle, "Flight hours per cycle")->capture_default_str();
         return [o] {
             check(*o);
             db::check_tail_number(o->tail);
+            if (!(o->cycles_per_day >= 0) || !(o->hours_per_cycle >= 0))
+                throw EmadiagError("--cycles-per-day and --hours-per-cycle must be >= 0");
+            db::StoredTestSession checked;
+            set_record_info(checked, o->record);  // an unknown position is an error before anything is simulated
+            const std::string serial =
+                !o->serial.empty() ? o->serial : "SIM-" + o->tail + (o->record.position.empty() ? "" : "-" + o->record.position);
+            const std::int64_t first_cycles = o->record.cycles.value_or(0);
             const double start_days = pg::parse_utc_days_or_throw(o->start_utc, "--start-utc");
             const sim::LoadCase load_case = sim::parse_load_case(o->load_case);
             const sim::NoiseProfile noise = sim::parse_noise(o->noise);
@@ -119,6 +136,15 @@ const bool registered = register_command(Command{
                 const double fsj_nm = o->fsj_start_nm + o->fsj_rate_nm_per_100d * t_days / kRatePeriodDays;
                 const std::string started_utc = pg::format_utc_time(start_days + t_days);
                 db::StoredTestSession s;
+                SessionRecordInfo info = o->record;
+                if (o->cycles_per_day > 0 || o->record.cycles) {
+                    info.cycles = first_cycles + static_cast<std::int64_t>(std::llround(o->cycles_per_day * t_days));
+                    info.hours_h = static_cast<double>(*info.cycles) * o->hours_per_cycle;
+                }
+                set_record_info(s, info);
+                s.actuator_serial = serial;
+                s.source = kHistorySimSource;
+                s.work_performed = "simulated ground test (history-sim): DYN, BRK";
                 s.tail_number = o->tail;
                 s.phase = o->phase;
                 s.started_utc = started_utc;
@@ -143,6 +169,7 @@ const bool registered = register_command(Command{
                     const sim::SimResult result = sim::simulate(c);
                     Run run = make_run(c, result);
                     run.set_meta("source", kHistorySimSource);
+                    run.set_meta("ema_serial_number", serial);
                     run.set_meta("tail_number", o->tail);
                     run.set_meta("phase", o->phase);
                     run.set_meta("history_sim_session", std::to_string(i + 1));
@@ -175,8 +202,12 @@ const bool registered = register_command(Command{
                 for (const auto& f : verdict.findings)
                     if (f.parameter == kParamFdj && f.estimator == "physics:dyn" && f.value)
                         physics_fdj = num(*f.value, 5) + " +/- " + num(f.std_error.value_or(0), 2);
-                const std::int64_t id = db::store_test_session(database, s);
-                std::cout << "  session " << id << "  " << started_utc << "  true FDJ " << num(fdj_nm, 5) << " FSJ " << num(fsj_nm, 5)
+                for (const auto& a : assessed)
+                    if (a.estimates) add_model_artifacts(s, a.estimates->model_files);
+                const db::SessionReceipt receipt = db::store_session(database, s);
+                const std::int64_t id = receipt.session_id;
+                if (receipt.installation) std::cout << "  " << describe_installation(*receipt.installation) << '\n';
+                std::cout << "  session " << id << "  " << started_utc << (s.cycles ? "  cycles " + std::to_string(*s.cycles) : "") << "  true FDJ " << num(fdj_nm, 5) << " FSJ " << num(fsj_nm, 5)
                           << "  physics:dyn FDJ " << physics_fdj << "  " << s.verdict << '\n';
             }
             std::cout << "stored " << o->sessions << " test sessions of " << o->tail << " in " << o->db << '\n';

@@ -3,6 +3,7 @@
 // findings against the limits and the verdict; the exit code is the verdict.
 #include "cli/command.hpp"
 #include "cli/interrupt.hpp"
+#include "cli/record_options.hpp"
 
 #include "diagnosis/test_run.hpp"
 #include "estimation/health_estimate.hpp"
@@ -33,6 +34,7 @@ struct TestRunCliOptions {
     std::string limits;
     std::uint16_t session_id = 1;
     int answer_timeout_ms = 500;
+    SessionRecordInfo record;
 };
 
 std::string num(double v, int digits = 4) {
@@ -71,6 +73,7 @@ const bool registered = register_command(Command{
         sub.add_option("--limits", o->limits, "Limits JSON (docs/test-run.md; default: the datasheet's section-8 envelope)")
             ->check(CLI::ExistingFile);
         sub.add_option("--session-id", o->session_id, "First START_SEQUENCE session id")->capture_default_str();
+        add_record_options(sub, o->record);
         sub.add_option("--answer-timeout-ms", o->answer_timeout_ms, "Time the EMA has to answer a command")->capture_default_str();
         return [o] {
             const std::atomic<bool>& interrupt = install_interrupt_handler();
@@ -85,6 +88,7 @@ const bool registered = register_command(Command{
             t.first_session_id = o->session_id;
             t.answer_timeout = std::chrono::milliseconds(o->answer_timeout_ms);
             t.tool_version = EMADIAG_VERSION;
+            t.record = o->record;
             t.on_progress = [](const std::string& line) { std::cout << line << '\n' << std::flush; };
             std::cout << "emadiag test-run " << EMADIAG_VERSION << ": " << t.tail_number << ", " << t.phase << ", on " << o->bus << '\n';
             auto bus = can::open_bus(o->bus);
@@ -92,7 +96,9 @@ const bool registered = register_command(Command{
             print_findings(std::cout, r, t.limits);
             std::cout << "\nVERDICT: " << to_string(r.assessment.verdict) << " -- " << r.assessment.reason << '\n'
                       << "tail " << t.tail_number << ", EMA serial " << (r.actuator_serial.empty() ? "?" : r.actuator_serial)
+                      << (t.record.position.empty() ? std::string() : ", position " + t.record.position)
                       << ", test session " << r.db_session_id << " in " << t.db_path << " (" << r.started_utc << ")\n";
+            if (r.installation) std::cout << "INSTALLATION CHANGE: " << describe_installation(*r.installation) << '\n';
             if (r.interrupted) return kExitInterrupted;
             if (r.assessment.verdict == Verdict::NoTest)
                 std::cerr << "emadiag: test-run: NO_TEST: the EMA was not assessed (" << r.assessment.reason

@@ -67,7 +67,7 @@ nlohmann::json to_json(const SessionManifest& m) {
     for (const auto& l : m.logs) logs.push_back({{"sequence", l.sequence}, {"attempt", l.attempt}, {"log_path", l.log_path}});
     return {{"format", kManifestFormat}, {"tail_number", m.tail_number}, {"phase", m.phase}, {"started_utc", m.started_utc},
             {"tool_version", m.tool_version}, {"limits_json", m.limits_json}, {"sequences", m.sequences},
-            {"logs", logs}, {"state", m.state}};
+            {"logs", logs}, {"state", m.state}, {"record_json", m.record_json}};
 }
 
 std::filesystem::path lock_path_for(const std::filesystem::path& manifest) {
@@ -88,6 +88,46 @@ int try_lock(const std::filesystem::path& path) {
 }
 
 }  // namespace
+
+std::string record_fields_json(const db::StoredTestSession& s) {
+    nlohmann::json j = nlohmann::json::object();
+    if (s.position) j["position"] = *s.position;
+    j["position_ata"] = s.position_ata;
+    j["position_description"] = s.position_description;
+    if (s.cycles) j["cycles"] = *s.cycles;
+    if (s.hours_h) j["hours_h"] = *s.hours_h;
+    j["operator_id"] = s.operator_id;
+    j["technician_name"] = s.technician_name;
+    j["technician_certificate"] = s.technician_certificate;
+    nlohmann::json artifacts = nlohmann::json::array();
+    for (const auto& a : s.artifacts) artifacts.push_back({{"role", a.role}, {"name", a.name}, {"sha256", a.sha256}});
+    j["artifacts"] = artifacts;
+    return j.dump();
+}
+
+void apply_record_fields(db::StoredTestSession& s, const std::string& record_json) {
+    nlohmann::json j;
+    try {
+        j = nlohmann::json::parse(record_json);
+    } catch (const nlohmann::json::exception& e) {
+        throw EmadiagError(std::string("spooled record fields are not JSON: ") + e.what());
+    }
+    if (!j.is_object()) throw EmadiagError("spooled record fields are not a JSON object");
+    auto text = [&](const char* k) { return j.contains(k) && j[k].is_string() ? j[k].get<std::string>() : std::string(); };
+    if (j.contains("position") && j["position"].is_string()) s.position = j["position"].get<std::string>();
+    s.position_ata = text("position_ata");
+    s.position_description = text("position_description");
+    if (j.contains("cycles") && j["cycles"].is_number_integer()) s.cycles = j["cycles"].get<std::int64_t>();
+    if (j.contains("hours_h") && j["hours_h"].is_number()) s.hours_h = j["hours_h"].get<double>();
+    s.operator_id = text("operator_id");
+    s.technician_name = text("technician_name");
+    s.technician_certificate = text("technician_certificate");
+    if (j.contains("artifacts") && j["artifacts"].is_array())
+        for (const auto& a : j["artifacts"])
+            if (a.is_object() && a.contains("role") && a.contains("name") && a.contains("sha256") && a["role"].is_string() &&
+                a["name"].is_string() && a["sha256"].is_string())
+                s.artifacts.push_back({a["role"].get<std::string>(), a["name"].get<std::string>(), a["sha256"].get<std::string>()});
+}
 
 std::filesystem::path spool_dir_for(const std::string& db_path) { return std::filesystem::path(db_path + ".spool"); }
 
@@ -145,6 +185,7 @@ SessionManifest read_session_manifest(const std::filesystem::path& path) {
     m.tool_version = text("tool_version");
     m.limits_json = text("limits_json");
     m.state = text("state");
+    m.record_json = j.contains("record_json") && j["record_json"].is_string() ? j["record_json"].get<std::string>() : "{}";
     if (!j.contains("sequences") || !j["sequences"].is_array()) throw EmadiagError(path.string() + ": field \"sequences\" missing");
     for (const auto& s : j["sequences"]) {
         if (!s.is_string()) throw EmadiagError(path.string() + ": field \"sequences\" holds a non-string");
@@ -252,8 +293,10 @@ std::vector<RecoveredSession> recover_spooled_sessions(const std::string& db_pat
             say("spool: " + path.filename().string() + ": no run could be decoded (" + a.reason + "); left in place");
             continue;
         }
-        const db::StoredTestSession s = session_parts::to_stored_session(m, runs, a);
-        rs.db_session_id = db::store_test_session(database, s);
+        db::StoredTestSession s = session_parts::to_stored_session(m, runs, a);
+        s.work_performed = "ground test run over CAN (" + m.phase + "), recovered from the spool after the tool stopped: verdict " +
+                           std::string(to_string(a.verdict));
+        rs.db_session_id = db::store_session(database, s).session_id;
         rs.verdict = to_string(a.verdict);
         rs.note = a.reason;
         std::filesystem::remove(path, ec);

@@ -8,6 +8,8 @@
 // the live run, stores the session in one transaction and only then deletes the manifest.
 #include "diagnosis/health_limits.hpp"
 
+#include "emadiag/db/test_session_store.hpp"
+
 #include <filesystem>
 #include <functional>
 #include <string>
@@ -27,11 +29,18 @@ struct SessionManifest {
     std::string started_utc;
     std::string tool_version;
     std::string limits_json = "{}";
+    /// The record fields of the session (position, ATA reference, cycles, hours, operator, person,
+    /// the position list's hash) as JSON, so a recovered session carries them too.
+    std::string record_json = "{}";
     std::vector<std::string> sequences;  ///< the routine commanded, in order
     std::vector<SpooledLog> logs;        ///< every log started, in order
     /// "recording" while sequences run; "recorded" once the routine ended and only storing is left.
     std::string state = "recording";
 };
+
+/// The record fields of `session` as JSON (SessionManifest::record_json), and back.
+[[nodiscard]] std::string record_fields_json(const db::StoredTestSession& session);
+void apply_record_fields(db::StoredTestSession& session, const std::string& record_json);
 
 /// DB.spool next to the database file.
 [[nodiscard]] std::filesystem::path spool_dir_for(const std::string& db_path);

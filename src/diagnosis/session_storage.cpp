@@ -1,6 +1,13 @@
 #include "diagnosis/session_storage.hpp"
 
+#include "core/emadiag_error.hpp"
+#include "diagnosis/positions.hpp"
+#include "emadiag/db/sha256.hpp"
+
 #include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
 
 namespace emadiag {
 
@@ -50,6 +57,43 @@ void set_assessment(db::StoredTestSession& session, const Assessment& assessment
         d.note = f.note;
         session.findings.push_back(std::move(d));
     }
+}
+
+void set_record_info(db::StoredTestSession& session, const SessionRecordInfo& info) {
+    if (info.cycles && *info.cycles < 0) throw EmadiagError("--cycles " + std::to_string(*info.cycles) + " is negative");
+    if (info.hours_h && !(std::isfinite(*info.hours_h) && *info.hours_h >= 0))
+        throw EmadiagError("--hours " + std::to_string(*info.hours_h) + " is not a number of hours >= 0");
+    if (!info.technician_certificate.empty() && info.technician_name.empty())
+        throw EmadiagError("--certificate " + info.technician_certificate + " without --technician: the record names the person");
+    if (!info.position.empty()) {
+        const PositionList list = PositionList::resolve(info.positions_file);
+        const Position& p = list.find(info.position);
+        session.position = p.name;
+        session.position_ata = p.ata;
+        session.position_description = p.description;
+        session.artifacts.push_back({"positions", list.source, list.sha256});
+    }
+    session.cycles = info.cycles;
+    session.hours_h = info.hours_h;
+    session.operator_id = info.operator_id;
+    session.technician_name = info.technician_name;
+    session.technician_certificate = info.technician_certificate;
+}
+
+void add_model_artifacts(db::StoredTestSession& session, const std::vector<std::string>& model_files) {
+    for (const auto& f : model_files) {
+        const bool seen = std::any_of(session.artifacts.begin(), session.artifacts.end(),
+                                      [&](const db::StoredArtifact& a) { return a.role == "model" && a.name == f; });
+        if (!seen) session.artifacts.push_back({"model", f, db::sha256_file_hex(f)});
+    }
+}
+
+std::string describe_installation(const db::StoredInstallation& i) {
+    std::string s = "installation change at " + i.position + " of " + i.tail_number + ": " +
+                    (i.from_serial.empty() ? std::string("(none recorded)") : i.from_serial) + " -> " + i.to_serial + " (session " +
+                    std::to_string(i.session_id) + ", " + i.detected_utc;
+    if (i.cycles) s += ", " + std::to_string(*i.cycles) + " cycles";
+    return s + ")";
 }
 
 }  // namespace emadiag

@@ -99,6 +99,8 @@ db::StoredTestSession to_stored_session(const SessionManifest& header, const std
     s.started_utc = header.started_utc;
     s.tool_version = header.tool_version;
     s.limits_json = header.limits_json;
+    s.source = "test-run";
+    apply_record_fields(s, header.record_json);
     for (const auto& r : runs) s.runs.push_back(to_stored(r, header.tail_number, header.started_utc));
     set_assessment(s, assessment);
     return s;
@@ -124,6 +126,8 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
             if (options.sequences[i] == options.sequences[j])
                 throw EmadiagError("test sequence " + sequence_name(options.sequences[i]) + " is listed twice");
     db::check_tail_number(options.tail_number);
+    db::StoredTestSession s;
+    set_record_info(s, options.record);  // an unknown position, bad cycles or hours: nothing moves
     // Open (create, migrate) the database before anything moves: a test must never end unstorable.
     std::optional<db::Database> database(std::in_place, options.db_path);
     std::error_code ec;
@@ -143,6 +147,7 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
     manifest.started_utc = result.started_utc;
     manifest.tool_version = options.tool_version;
     manifest.limits_json = options.limits.to_json().dump();
+    manifest.record_json = record_fields_json(s);
     for (const auto seq : options.sequences) manifest.sequences.push_back(sequence_name(seq));
     SessionSpool spool(spool_dir_for(options.db_path), manifest);
 
@@ -260,15 +265,29 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
     }
     spool.set_state("recorded");
 
-    const db::StoredTestSession s = session_parts::to_stored_session(spool.manifest(), result.runs, result.assessment);
+    db::StoredTestSession stored = session_parts::to_stored_session(spool.manifest(), result.runs, result.assessment);
+    std::string done;
+    for (const auto& r : result.runs) {
+        if (r.estimates) add_model_artifacts(stored, r.estimates->model_files);
+        done += (done.empty() ? "" : ", ") + r.sequence;
+    }
+    stored.work_performed = "ground test run over CAN (" + options.phase + "): " + (done.empty() ? std::string("no sequence") : done) +
+                            "; estimates (physics, network) and verdict " + std::string(to_string(result.assessment.verdict));
+    db::SessionReceipt receipt;
     try {
-        result.db_session_id = db::store_test_session(*database, s);
+        receipt = db::store_session(*database, stored);
     } catch (const std::exception& e) {
         throw EmadiagError(std::string(e.what()) + "; nothing was stored: the session stays spooled in " + spool.path().string() +
                            " and `emadiag recover --db " + options.db_path + "` (or the next test-run) stores it");
     }
     spool.remove();
-    say("stored as test session " + std::to_string(result.db_session_id) + " of " + options.tail_number + " in " + options.db_path);
+    result.db_session_id = receipt.session_id;
+    result.content_sha256 = receipt.content_sha256;
+    result.installation = receipt.installation;
+    say("stored as test session " + std::to_string(result.db_session_id) + " of " + options.tail_number +
+        (stored.position ? " at " + *stored.position : std::string()) + " in " + options.db_path + " (chain " +
+        receipt.content_sha256.substr(0, 16) + ")");
+    if (receipt.installation) say(describe_installation(*receipt.installation));
     if (failure) throw EmadiagError(*failure + " (the " + std::to_string(result.runs.size()) + " run(s) recorded are stored as test session " +
                                     std::to_string(result.db_session_id) + ", verdict NO_TEST)");
     return result;

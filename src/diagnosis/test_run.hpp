@@ -16,6 +16,7 @@
 #include "can_tool/recorder.hpp"
 #include "diagnosis/session_spool.hpp"
 #include "diagnosis/health_limits.hpp"
+#include "diagnosis/session_storage.hpp"
 #include "diagnosis/verdict.hpp"
 
 #include "emadiag/db/test_session_store.hpp"
@@ -50,6 +51,9 @@ struct TestRunOptions {
     std::string tool_version;
     /// Run a sequence once more when a transient loss invalidated it.
     bool retry_transient = true;
+    /// Position, cycles, hours, operator, technician and certificate for the record (checked first:
+    /// an unknown position is an error before anything moves).
+    SessionRecordInfo record;
     /// Progress lines for the technician (libraries never print; the CLI passes them to stdout).
     std::function<void(const std::string&)> on_progress;
 };
@@ -71,6 +75,8 @@ struct TestRunResult {
     Assessment assessment;
     bool interrupted = false;
     std::vector<RecoveredSession> recovered;  ///< earlier spooled sessions stored first
+    std::string content_sha256;  ///< the stored session's link in the tail's hash chain
+    std::optional<db::StoredInstallation> installation;  ///< when the position showed a new serial
 };
 
 /// Runs the session. Throws EmadiagError (after keeping the logs written so far on disk) when the

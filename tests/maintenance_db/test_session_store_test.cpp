@@ -4,6 +4,7 @@
 #include "emadiag/db/db_error.hpp"
 #include "emadiag/db/run_store.hpp"
 #include "emadiag/db/test_session_store.hpp"
+#include "support/db_test_files.hpp"
 #include "support/stored_run_example.hpp"
 
 #include <gmock/gmock.h>
@@ -32,7 +33,7 @@ using ::testing::Pair;
 using ::testing::SizeIs;
 using ::testing::ThrowsMessage;
 
-constexpr int kNewestSchemaVersion = 2;  // schema/002_test_sessions.sql
+constexpr int kNewestSchemaVersion = 4;  // schema/004_append_only.sql
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -101,7 +102,7 @@ std::vector<StoredFinding> sorted_as_loaded(std::vector<StoredFinding> findings)
 /// Rows in every table of the database (sqlite_sequence included), by table name.
 std::map<std::string, std::int64_t> row_counts(Database& db) {
     std::vector<std::string> tables;
-    Statement names(db, "SELECT name FROM sqlite_master WHERE type = 'table' ORDER BY name");
+    Statement names(db, "SELECT name FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite_%' ORDER BY name");
     while (names.step()) tables.push_back(names.column_text(0));
     std::map<std::string, std::int64_t> counts;
     for (const auto& t : tables) {
@@ -112,70 +113,9 @@ std::map<std::string, std::int64_t> row_counts(Database& db) {
     return counts;
 }
 
-/// A database file in the temporary directory, unique to this test and process, removed at both ends.
-class TempDbFile {
-public:
-    TempDbFile() {
-        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        path_ = (std::filesystem::temp_directory_path() /
-                 ("emadiag_" + std::string(info->name()) + "_" + std::to_string(::getpid()) + ".sqlite"))
-                    .string();
-        remove();
-    }
-    ~TempDbFile() { remove(); }
-    TempDbFile(const TempDbFile&) = delete;
-    TempDbFile& operator=(const TempDbFile&) = delete;
-    [[nodiscard]] const std::string& path() const { return path_; }
-
-private:
-    void remove() const {
-        std::error_code ignored;
-        std::filesystem::remove(path_, ignored);
-        std::filesystem::remove(path_ + "-journal", ignored);
-    }
-    std::string path_;
-};
-
-/// A bare SQLite connection that applies no migrations: builds and inspects files as an older
-/// emadiag left them.
-class RawConnection {
-public:
-    explicit RawConnection(const std::string& path) {
-        if (sqlite3_open(path.c_str(), &db_) != SQLITE_OK) throw std::runtime_error("cannot open " + path);
-    }
-    ~RawConnection() { sqlite3_close(db_); }
-    RawConnection(const RawConnection&) = delete;
-    RawConnection& operator=(const RawConnection&) = delete;
-    void exec(const std::string& sql) {
-        char* err = nullptr;
-        if (sqlite3_exec(db_, sql.c_str(), nullptr, nullptr, &err) != SQLITE_OK) {
-            const std::string msg = err != nullptr ? err : "unknown error";
-            sqlite3_free(err);
-            throw std::runtime_error("raw SQL failed: " + msg + " in: " + sql.substr(0, 120));
-        }
-    }
-    std::int64_t query_int(const std::string& sql) {
-        sqlite3_stmt* st = nullptr;
-        if (sqlite3_prepare_v2(db_, sql.c_str(), -1, &st, nullptr) != SQLITE_OK || sqlite3_step(st) != SQLITE_ROW) {
-            sqlite3_finalize(st);
-            throw std::runtime_error("raw query failed: " + sql);
-        }
-        const std::int64_t v = sqlite3_column_int64(st, 0);
-        sqlite3_finalize(st);
-        return v;
-    }
-
-private:
-    sqlite3* db_ = nullptr;
-};
-
-std::string read_text_file(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw std::runtime_error("cannot read " + path);
-    std::ostringstream text;
-    text << in.rdbuf();
-    return text.str();
-}
+using test::RawConnection;
+using test::read_text_file;
+using test::TempDbFile;
 
 TEST(TestSessionStore, StoreThenLoadGivesBackEverything) {
     Database db(":memory:");
@@ -284,14 +224,17 @@ TEST(TestSessionStore, SchemaChecksAreTheSecondLineOfDefence) {
     // Straight SQL, past the checks in store_test_session: the schema still refuses bad values.
     Database db(":memory:");
     db.exec("INSERT INTO aircraft VALUES ('F-WEMA')");
-    const std::string session_sql = "INSERT INTO test_sessions(tail_number, phase, started_utc, verdict) VALUES ";
-    EXPECT_THAT([&] { db.exec(session_sql + "('F-WEMA', 'mid-flight', '2026-11-22T20:00:00Z', 'NO_TEST')"); },
+    const std::string session_sql = "INSERT INTO test_sessions(tail_number, phase, started_utc, verdict, prev_sha256, content_sha256) VALUES ";
+    const std::string hashes = ", '', '" + std::string(64, 'a') + "')";
+    EXPECT_THAT([&] { db.exec(session_sql + "('F-WEMA', 'pre-flight', '2026-11-22T20:00:00Z', 'NO_TEST', NULL, NULL)"); },
+                ThrowsMessage<DbError>(HasSubstr("append-only record: a test session is stored with its hash chain")));
+    EXPECT_THAT([&] { db.exec(session_sql + "('F-WEMA', 'mid-flight', '2026-11-22T20:00:00Z', 'NO_TEST'" + hashes); },
                 ThrowsMessage<DbError>(HasSubstr("CHECK constraint failed")));
-    EXPECT_THAT([&] { db.exec(session_sql + "('F-WEMA', 'pre-flight', '2026-11-22T20:00:00Z', 'OK')"); },
+    EXPECT_THAT([&] { db.exec(session_sql + "('F-WEMA', 'pre-flight', '2026-11-22T20:00:00Z', 'OK'" + hashes); },
                 ThrowsMessage<DbError>(HasSubstr("CHECK constraint failed")));
-    EXPECT_THAT([&] { db.exec(session_sql + "('F-WNONE', 'pre-flight', '2026-11-22T20:00:00Z', 'NO_TEST')"); },
+    EXPECT_THAT([&] { db.exec(session_sql + "('F-WNONE', 'pre-flight', '2026-11-22T20:00:00Z', 'NO_TEST'" + hashes); },
                 ThrowsMessage<DbError>(HasSubstr("FOREIGN KEY constraint failed")));
-    db.exec(session_sql + "('F-WEMA', 'pre-flight', '2026-11-22T20:00:00Z', 'NO_TEST')");
+    db.exec(session_sql + "('F-WEMA', 'pre-flight', '2026-11-22T20:00:00Z', 'NO_TEST'" + hashes);
     const std::string finding_sql = "INSERT INTO findings(session_id, parameter, estimator, limit_value, limit_kind, status) VALUES ";
     EXPECT_THAT([&] { db.exec(finding_sql + "(1, 'FDJ_Nm', 'physics', 0.1, 'below', 'WITHIN')"); },
                 ThrowsMessage<DbError>(HasSubstr("CHECK constraint failed")));
@@ -302,8 +245,15 @@ TEST(TestSessionStore, SchemaChecksAreTheSecondLineOfDefence) {
     db.exec(finding_sql + "(1, 'FDJ_Nm', 'physics', 0.1, 'max', 'WITHIN')");
     EXPECT_THAT([&] { db.exec(finding_sql + "(1, 'FDJ_Nm', 'physics', 0.1, 'max', 'BEYOND')"); },
                 ThrowsMessage<DbError>(HasSubstr("UNIQUE constraint failed: findings")));
-    db.exec("DELETE FROM test_sessions");
-    EXPECT_EQ(row_counts(db).at("findings"), 0) << "a session's findings go with it";
+    for (const char* table : {"test_sessions", "findings"}) {
+        EXPECT_THAT([&] { db.exec(std::string("DELETE FROM ") + table); },
+                    ThrowsMessage<DbError>(HasSubstr(std::string("append-only record: ") + table + " rows are never deleted")));
+    }
+    EXPECT_THAT([&] { db.exec("UPDATE findings SET status = 'WITHIN'"); },
+                ThrowsMessage<DbError>(HasSubstr("append-only record: findings rows are never updated")));
+    EXPECT_THAT([&] { db.exec("UPDATE test_sessions SET verdict = 'SERVICEABLE'"); },
+                ThrowsMessage<DbError>(HasSubstr("append-only record: test_sessions rows are never updated")));
+    EXPECT_EQ(row_counts(db).at("findings"), 1) << "nothing was deleted";
 }
 
 struct BadSession {
@@ -330,7 +280,7 @@ INSTANTIATE_TEST_SUITE_P(
     TestSessionStore, InvalidSession,
     ::testing::Values(
         BadSession{"BadPhase", [](auto& s) { s.phase = "mid-flight"; },
-                   "test session: phase is 'mid-flight': use 'pre-flight' or 'post-flight'"},
+                   "test session: phase is 'mid-flight': use 'pre-flight', 'post-flight', 'in-flight' or 'load-rig'"},
         BadSession{"BadVerdict", [](auto& s) { s.verdict = "OK"; },
                    "test session: verdict is 'OK': use 'SERVICEABLE', 'UNSERVICEABLE', 'INCONCLUSIVE' or 'NO_TEST'"},
         BadSession{"BadTail",
@@ -427,7 +377,7 @@ TEST(Database, RefusesADatabaseOneVersionNewerThanTheCode) {
         db.exec("PRAGMA user_version = " + std::to_string(kNewestSchemaVersion + 1));
     }
     EXPECT_THAT([&] { Database db(file.path()); },
-                ThrowsMessage<DbError>(HasSubstr("has schema version 3, newer than this emadiag understands (2)")));
+                ThrowsMessage<DbError>(HasSubstr("has schema version 5, newer than this emadiag understands (4)")));
     RawConnection raw(file.path());
     EXPECT_EQ(raw.query_int("PRAGMA user_version"), kNewestSchemaVersion + 1) << "never downgraded";
     EXPECT_EQ(raw.query_int("SELECT count(*) FROM test_sessions"), 1);

@@ -5,6 +5,8 @@
 #include "diagnosis/test_run.hpp"
 #include "emadiag/can/memory_bus.hpp"
 #include "emadiag/db/db_error.hpp"
+#include "emadiag/db/record_store.hpp"
+#include "emadiag/db/sha256.hpp"
 #include "emadiag/db/test_session_store.hpp"
 #include "support/node_runner.hpp"
 
@@ -102,6 +104,51 @@ TEST_F(TestRun, HealthyEmaIsServiceableAndEverythingIsStoredUnderTheTail) {
     EXPECT_EQ(s.runs[0].load_case, "A");
 }
 
+TEST_F(TestRun, TheRecordKeepsPositionSerialCyclesAndThePersonAndNotesAnInstallationChange) {
+    can::MemoryBusHub hub;
+    can::MemoryBus tool(hub, "tool");
+    TestRunOptions o = options("N123EM");
+    o.sequences = {can::icd::TestSequence::Dyn};  // a network model is shipped for case A DYN
+    o.record.position = "RH-ELEV";
+    o.record.cycles = 4120;
+    o.record.hours_h = 6203.5;
+    o.record.operator_id = "EMA-AIR";
+    o.record.technician_name = "A. Mechanic";
+    o.record.technician_certificate = "B1-12345";
+    std::vector<TestRunResult> results;
+    for (const std::uint32_t serial : {1001u, 1001u, 2002u}) {
+        node::EmaNodeConfig c = ema_config(0.08, 0.12, serial);
+        c.ident.serial_number = serial;
+        test::NodeRunner ema(hub, c);
+        results.push_back(run_test(tool, o, interrupt_));
+        o.record.cycles = *o.record.cycles + 10;
+    }
+    EXPECT_EQ(results[0].actuator_serial, "1001") << "from the EMA's identification";
+    ASSERT_TRUE(results[0].installation);
+    EXPECT_EQ(results[0].installation->to_serial, "1001");
+    EXPECT_FALSE(results[1].installation);
+    ASSERT_TRUE(results[2].installation) << "a new serial at RH-ELEV";
+    EXPECT_EQ(results[2].installation->from_serial, "1001");
+    EXPECT_EQ(results[2].installation->to_serial, "2002");
+    EXPECT_EQ(results[2].installation->cycles, std::optional<std::int64_t>(4140));
+    db::Database database(o.db_path);
+    const db::StoredTestSession s = db::load_test_session(database, results[0].db_session_id);
+    EXPECT_EQ(s.position, std::optional<std::string>("RH-ELEV"));
+    EXPECT_EQ(s.position_ata, "27-30");
+    EXPECT_EQ(s.cycles, std::optional<std::int64_t>(4120));
+    EXPECT_EQ(s.hours_h, std::optional<double>(6203.5));
+    EXPECT_EQ(s.technician_name, "A. Mechanic");
+    EXPECT_EQ(s.technician_certificate, "B1-12345");
+    EXPECT_EQ(s.operator_id, "EMA-AIR");
+    EXPECT_EQ(s.source, "test-run");
+    EXPECT_THAT(s.work_performed, HasSubstr("ground test run over CAN (post-flight): dyn"));
+    EXPECT_EQ(s.limits_sha256.size(), 64u);
+    bool model_hashed = false;
+    for (const auto& a : s.artifacts) model_hashed = model_hashed || (a.role == "model" && a.sha256 == db::sha256_file_hex(a.name));
+    EXPECT_TRUE(model_hashed) << "the network model file used, with its SHA-256";
+    EXPECT_TRUE(db::verify_tail(database, "N123EM").ok());
+}
+
 TEST_F(TestRun, WornTransmissionIsUnserviceableNamingTheParameter) {
     can::MemoryBusHub hub;
     can::MemoryBus tool(hub, "tool");
@@ -128,7 +175,15 @@ TEST_F(TestRun, BadTailNumberIsRefusedBeforeTheSurfaceMoves) {
     o = options("N123EM");
     o.phase = "mid-flight";
     EXPECT_THAT([&] { (void)run_test(tool, o, interrupt_); }, ::testing::ThrowsMessage<EmadiagError>(HasSubstr("phase \"mid-flight\"")));
+    o = options("N123EM");
+    o.record.position = "LH-WING";
+    EXPECT_THAT([&] { (void)run_test(tool, o, interrupt_); },
+                ::testing::ThrowsMessage<EmadiagError>(HasSubstr("unknown position 'LH-WING' (known positions, built-in: LH-AIL, RH-AIL")));
+    o.record.position = "LH-ELEV";
+    o.record.cycles = -3;
+    EXPECT_THAT([&] { (void)run_test(tool, o, interrupt_); }, ::testing::ThrowsMessage<EmadiagError>(HasSubstr("--cycles -3 is negative")));
     EXPECT_EQ(ema.stats().sequences_started, 0u);
+    EXPECT_FALSE(std::filesystem::exists(o.db_path)) << "nothing stored, not even an empty database";
 }
 
 TEST_F(TestRun, EmaThatDoesNotReportGroundTestIsNeverStarted) {

@@ -1,6 +1,8 @@
 #pragma once
 // A thin RAII layer over the SQLite C API (after SQLiteCpp): Database, Statement, Transaction.
 #include <cstdint>
+#include <memory>
+#include <unordered_map>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -44,9 +46,14 @@ private:
 
 class Database {
 public:
+    static constexpr int kDefaultBusyTimeoutMs = 5000;
     /// Opens (creating if needed) the database at `path` (":memory:" for tests) and brings its schema
-    /// to the newest version. A busy database is retried for busy_timeout_ms before DbError.
-    explicit Database(const std::string& path, int busy_timeout_ms = 5000);
+    /// to the newest version. A busy database is retried for busy_timeout_ms before DbError (kind
+    /// Busy). An existing file is checked before anything is written: its header must be SQLite's
+    /// and, with `quick_check`, PRAGMA quick_check must pass; otherwise DbError (kind Corrupt) and the
+    /// file is left untouched. quick_check reads the whole file (about 1 s per GB); skip it only for
+    /// a file this process has just checked or created.
+    explicit Database(const std::string& path, int busy_timeout_ms = kDefaultBusyTimeoutMs, bool quick_check = true);
     ~Database();
     Database(const Database&) = delete;
     Database& operator=(const Database&) = delete;
@@ -56,13 +63,20 @@ public:
     [[nodiscard]] std::int64_t last_insert_id() const;
     [[nodiscard]] sqlite3* handle() const { return db_; }
     [[nodiscard]] const std::string& path() const { return path_; }
+    [[nodiscard]] int busy_timeout_ms() const { return busy_timeout_ms_; }
     /// "message (path)" for the last error on this connection.
     [[nodiscard]] std::string error_text() const;
+    /// A statement prepared once per connection and kept (for the bulk paths); reset and unbound
+    /// on every call. Valid while the Database lives.
+    [[nodiscard]] Statement& cached(const std::string& sql);
 
 private:
+    void check_before_write();
     void migrate();
     sqlite3* db_ = nullptr;
     std::string path_;
+    int busy_timeout_ms_ = kDefaultBusyTimeoutMs;
+    std::unordered_map<std::string, std::unique_ptr<Statement>> cache_;
 };
 
 /// Begins a transaction; rolls back in the destructor unless commit() was called. Never throws

@@ -25,10 +25,35 @@ struct StoredFinding {
     std::string note;
 };
 
+/// A file or setting a session used, with its SHA-256 (model files, the limits, the position list).
+struct StoredArtifact {
+    std::string role;    ///< "model", "limits" or "positions"
+    std::string name;    ///< the file as given, or "built-in"
+    std::string sha256;  ///< 64 lowercase hex digits
+};
+
 struct StoredTestSession {
     std::int64_t session_id = 0;  ///< set by store_test_session / load
     std::string tail_number, actuator_serial;
-    std::string phase;        ///< "pre-flight" or "post-flight"
+    /// The position of the actuator (e.g. "LH-ELEV"); empty: not given. Registered in table positions
+    /// with position_ata and position_description the first time it is used.
+    std::optional<std::string> position;
+    std::string position_ata;          ///< ATA chapter 27 reference, e.g. "27-30" (needed with a position)
+    std::string position_description;  ///< loaded back from table positions
+    std::string phase;        ///< "pre-flight", "post-flight" (ground tests), "in-flight" or "load-rig" (imports)
+    std::optional<std::int64_t> cycles;  ///< aircraft flight cycles from the technical log
+    std::optional<double> hours_h;       ///< aircraft flight hours from the technical log
+    std::string operator_id;             ///< the aircraft operator
+    std::string technician_name, technician_certificate;  ///< the person who did the work and their certificate number
+    std::string work_performed;          ///< what was done, in words
+    std::string source;                  ///< the command: "test-run", "import", "history-sim"
+    std::vector<StoredArtifact> artifacts;  ///< model files and the like with their hashes (limits: added by the store)
+    /// A correction: the earlier session (same tail) this entry amends, and why. Each session is amended at most once.
+    std::optional<std::int64_t> amends_session_id;
+    std::string correction_reason;
+    std::string limits_sha256;   ///< set by the store: SHA-256 of limits_json
+    std::string prev_sha256;     ///< set by the store: the tail's previous session's content_sha256 ("" for the first)
+    std::string content_sha256;  ///< set by the store: docs/record-format.md
     std::string started_utc;  ///< ISO 8601, "YYYY-MM-DDThh:mm:ss..." (sessions are listed in its order)
     std::string tool_version;
     std::string verdict;  ///< SERVICEABLE, UNSERVICEABLE, INCONCLUSIVE or NO_TEST
@@ -37,6 +62,32 @@ struct StoredTestSession {
     std::vector<StoredRun> runs;  ///< each stored with this session's id, loaded in the order stored
     std::vector<StoredFinding> findings;  ///< loaded ordered by parameter, then estimator
 };
+
+/// An installation change: a position of a tail shows a new actuator serial.
+struct StoredInstallation {
+    std::int64_t installation_id = 0;
+    std::string tail_number, position;
+    std::string from_serial;  ///< "" for the first serial seen at the position
+    std::string to_serial;
+    std::string detected_utc;  ///< the started_utc of the session that showed to_serial
+    std::optional<std::int64_t> cycles;
+    std::optional<double> hours_h;
+    std::int64_t session_id = 0;
+};
+
+/// What storing a session did.
+struct SessionReceipt {
+    std::int64_t session_id = 0;
+    std::string content_sha256;
+    std::optional<StoredInstallation> installation;  ///< recorded when the position showed a new serial
+};
+
+/// Stores the session like store_test_session and says what it did.
+[[nodiscard]] SessionReceipt store_session(Database& db, const StoredTestSession& session);
+
+/// Stores many sessions in ONE transaction (bulk import, e.g. from another maintenance system):
+/// all of them or none. Each is checked first; DbError names the batch index.
+[[nodiscard]] std::vector<SessionReceipt> store_sessions(Database& db, const std::vector<StoredTestSession>& sessions);
 
 /// Stores the session, all its runs (samples, raw logs, estimates) and findings in ONE transaction;
 /// returns the session id. On any invalid field nothing at all is written; DbError names the field
@@ -49,5 +100,13 @@ struct StoredTestSession {
 /// The sessions of one aircraft, oldest first, with findings and with runs WITHOUT samples/raw logs
 /// (their estimates included).
 [[nodiscard]] std::vector<StoredTestSession> list_test_sessions(Database& db, const std::string& tail_number);
+
+/// The sessions of one actuator serial on any tail, oldest first, as list_test_sessions gives them.
+[[nodiscard]] std::vector<StoredTestSession> list_sessions_of_serial(Database& db, const std::string& actuator_serial);
+
+/// The SHA-256 chaining `session` (its stored content, docs/record-format.md) to `prev_sha256`.
+/// Findings, estimates and artifacts are taken in their canonical order, so the value does not
+/// depend on the order they were given in.
+[[nodiscard]] std::string session_content_sha256(const StoredTestSession& session, const std::string& prev_sha256);
 
 }  // namespace emadiag::db

@@ -1,0 +1,22 @@
+#pragma once
+// Reading a run file by its extension: RUN.csv (the run CSV) or RUN.log (a candump log of a session).
+#include "can_tool/candump_run.hpp"
+#include "core/emadiag_error.hpp"
+#include "core/run.hpp"
+#include "core/run_csv.hpp"
+
+#include <string>
+
+namespace emadiag::cli {
+
+inline bool ends_with(const std::string& s, const std::string& suffix) {
+    return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+inline Run read_run_any(const std::string& path) {
+    if (ends_with(path, ".log")) return read_run_candump(path);
+    if (!ends_with(path, ".csv")) throw EmadiagError(path + ": unknown run format; expected RUN.csv (run CSV) or RUN.log (candump)");
+    return read_run_csv_file(path);
+}
+
+}  // namespace emadiag::cli

@@ -1,0 +1,346 @@
+#include "prognostics/fleet_record.hpp"
+
+#include "core/emadiag_error.hpp"
+#include "estimation/health_estimate.hpp"
+#include "prognostics/utc_time.hpp"
+
+#include <algorithm>
+#include <map>
+#include <set>
+
+namespace emadiag::prognostics {
+namespace {
+
+using json = nlohmann::ordered_json;
+constexpr const char* kNoPosition = "(none)";
+
+/// estimate_rul words its summary in days; on the cycles axis the same numbers are cycles.
+std::string in_cycles(std::string s) {
+    for (const auto& [from, to] : {std::pair<std::string, std::string>{" days", " cycles"}, {"at day ", "at cycle "}, {"(day ", "(cycle "}}) {
+        for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size())) s.replace(at, from.size(), to);
+    }
+    return s;
+}
+
+/// What a trend needs of a session (build_series reads the id, the time and the findings): a
+/// light copy, so that the views do not copy every session's record text.
+db::StoredTestSession light(const db::StoredTestSession& s) {
+    db::StoredTestSession l;
+    l.session_id = s.session_id;
+    l.started_utc = s.started_utc;
+    l.findings = s.findings;
+    return l;
+}
+
+/// The sessions of a view on both axes, prepared once for its four parameters.
+struct ViewAxes {
+    std::vector<db::StoredTestSession> sessions, with_cycles;
+    std::vector<double> days, cycle_axis;
+    double origin_days = 0;
+};
+
+ParameterHistory analyse(const ViewAxes& v, const std::string& parameter, const FleetRecordOptions& o) {
+    ParameterHistory h;
+    h.parameter = parameter;
+    if (!v.with_cycles.empty()) {
+        RulOptions r = o.rul;
+        r.horizon_days = o.horizon_cycles;
+        AxisTrend a{kAxisCycles, analyse_parameter(build_series(v.with_cycles, v.cycle_axis, parameter, 0.0), r)};
+        a.trend.rul.summary = in_cycles(a.trend.rul.summary);
+        if (v.with_cycles.size() < v.sessions.size())
+            a.trend.series.notes.push_back(std::to_string(v.sessions.size() - v.with_cycles.size()) +
+                                           " session(s) without cycles left out of the cycles axis");
+        h.axes.push_back(std::move(a));
+    }
+    AxisTrend d{kAxisDays, analyse_parameter(build_series(v.sessions, v.days, parameter, v.origin_days), o.rul)};
+    if (d.trend.rul.crossing_t_days) d.trend.crossing_days_since_epoch = v.origin_days + *d.trend.rul.crossing_t_days;
+    h.axes.push_back(std::move(d));
+    h.preferred_axis = !v.with_cycles.empty() && v.with_cycles.size() == v.sessions.size() ? kAxisCycles : kAxisDays;
+    return h;
+}
+
+void fill_trends(HistoryView& v, const std::vector<const db::StoredTestSession*>& trend_sessions, const FleetRecordOptions& o) {
+    std::vector<db::StoredTestSession> picked;
+    picked.reserve(trend_sessions.size());
+    std::vector<std::optional<std::int64_t>> cycles;
+    std::vector<std::string> tails;
+    for (const auto* s : trend_sessions) {
+        if (o.phase != kPhaseAll && s->phase != o.phase) continue;
+        picked.push_back(light(*s));
+        cycles.push_back(s->cycles);
+        tails.push_back(s->tail_number);
+        v.trend_session_ids.push_back(s->session_id);
+    }
+    if (picked.size() < trend_sessions.size())
+        v.notes.push_back(std::to_string(trend_sessions.size() - picked.size()) + " session(s) of another phase than " + o.phase +
+                          " left out of the trends");
+    ViewAxes axes;
+    axes.days = session_days(picked);
+    axes.origin_days = axes.days.empty() ? 0.0 : *std::min_element(axes.days.begin(), axes.days.end());
+    // The actuator's cycles: aircraft cycles since the view's first session, summed over the tails it
+    // was on (the cycles between a removal and the next installation are not known: none).
+    double total = 0;
+    std::optional<std::size_t> prev;
+    for (std::size_t i = 0; i < picked.size(); ++i) {
+        if (!cycles[i]) continue;
+        if (prev && tails[*prev] == tails[i]) total += static_cast<double>(*cycles[i] - *cycles[*prev]);
+        prev = i;
+        axes.with_cycles.push_back(picked[i]);
+        axes.cycle_axis.push_back(total);
+    }
+    axes.sessions = std::move(picked);
+    for (const char* p : {kParamFdj, kParamFsj, kParamEtaO, kParamEtaA}) v.parameters.push_back(analyse(axes, p, o));
+}
+
+json optional_number(const std::optional<double>& v) { return v ? json(*v) : json(nullptr); }
+
+json session_json(const db::StoredTestSession& s) {
+    json j;
+    j["session_id"] = s.session_id;
+    j["started_utc"] = s.started_utc;
+    j["tail_number"] = s.tail_number;
+    j["position"] = s.position ? json(*s.position) : json(nullptr);
+    j["actuator_serial"] = s.actuator_serial;
+    j["phase"] = s.phase;
+    j["source"] = s.source;
+    j["cycles"] = s.cycles ? json(*s.cycles) : json(nullptr);
+    j["hours"] = optional_number(s.hours_h);
+    j["operator_id"] = s.operator_id;
+    j["technician_name"] = s.technician_name;
+    j["technician_certificate"] = s.technician_certificate;
+    j["work_performed"] = s.work_performed;
+    j["verdict"] = s.verdict;
+    j["verdict_note"] = s.verdict_note;
+    j["amends_session_id"] = s.amends_session_id ? json(*s.amends_session_id) : json(nullptr);
+    j["content_sha256"] = s.content_sha256;
+    return j;
+}
+
+json installation_json(const db::StoredInstallation& i) {
+    return {{"installation_id", i.installation_id}, {"tail_number", i.tail_number}, {"position", i.position}, {"from_serial", i.from_serial},
+            {"to_serial", i.to_serial},           {"detected_utc", i.detected_utc}, {"cycles", i.cycles ? json(*i.cycles) : json(nullptr)},
+            {"hours", optional_number(i.hours_h)}, {"session_id", i.session_id}};
+}
+
+json axis_json(const AxisTrend& a) {
+    const ParameterTrend& p = a.trend;
+    json q;
+    q["axis"] = a.axis;
+    q["status"] = to_string(p.rul.status);
+    q["summary"] = p.rul.summary;
+    q["points"] = json::array();
+    for (const auto& pt : p.series.points)
+        q["points"].push_back({{"session_id", pt.session_id}, {"started_utc", pt.started_utc}, {"t", pt.t_days}, {"value", pt.value},
+                               {"std_error", pt.std_error}});
+    q["limit"] = p.series.limit ? json{{"kind", to_string(p.series.limit->side)}, {"value", p.series.limit->value}} : json(nullptr);
+    if (p.has_fit) {
+        const DegradationFit& f = p.fits.chosen();
+        q["model"] = {{"chosen", to_string(f.model)},
+                      {"reason", p.fits.choice.reason},
+                      {"a", f.a},
+                      {"b_per_unit", f.b},
+                      {"covariance", {{f.covariance(0, 0), f.covariance(0, 1)}, {f.covariance(1, 0), f.covariance(1, 1)}}}};
+    } else {
+        q["model"] = nullptr;
+    }
+    q["trend_per_100"] = p.trend_per_period ? json{{"value", *p.trend_per_period}, {"std_error", *p.trend_per_period_se}} : json(nullptr);
+    q["crossing_t"] = optional_number(p.rul.crossing_t_days);
+    q["crossing_date_utc"] = p.crossing_days_since_epoch ? json(format_utc_date(*p.crossing_days_since_epoch)) : json(nullptr);
+    q["rul"] = {{"estimate", optional_number(p.rul.rul_days)},
+                {"ci90", p.rul.interval_computed ? json{optional_number(p.rul.rul_lower_days), optional_number(p.rul.rul_upper_days)}
+                                                 : json(nullptr)},
+                {"horizon", p.rul.horizon_days},
+                {"t_last", p.rul.t_last_days}};
+    q["notes"] = p.series.notes;
+    return q;
+}
+
+json view_json(const HistoryView& v) {
+    json j;
+    j["kind"] = v.kind;
+    j["key"] = v.key;
+    if (v.kind == "position") {
+        j["ata_reference"] = v.ata_reference;
+        j["description"] = v.description;
+        j["current_serial"] = v.current_serial;
+    } else {
+        j["current_place"] = v.current_place;
+    }
+    j["last_verdict"] = v.last_verdict;
+    j["sessions"] = json::array();
+    for (const auto& s : v.sessions) j["sessions"].push_back(session_json(s));
+    j["trend_session_ids"] = v.trend_session_ids;
+    j["installations"] = json::array();
+    for (const auto& i : v.installations) j["installations"].push_back(installation_json(i));
+    j["parameters"] = json::array();
+    for (const auto& p : v.parameters) {
+        json q;
+        q["parameter"] = p.parameter;
+        q["preferred_axis"] = p.preferred_axis;
+        q["axes"] = json::array();
+        for (const auto& a : p.axes) q["axes"].push_back(axis_json(a));
+        j["parameters"].push_back(std::move(q));
+    }
+    j["notes"] = v.notes;
+    return j;
+}
+
+}  // namespace
+
+const AxisTrend* ParameterHistory::preferred() const {
+    for (const auto& a : axes)
+        if (a.axis == preferred_axis) return &a;
+    return axes.empty() ? nullptr : &axes.back();
+}
+
+FleetRecord build_fleet_record(db::Database& database, const std::string& tail_number, const FleetRecordOptions& options) {
+    if (options.phase != kPhaseAll && options.phase != "pre-flight" && options.phase != "post-flight" && options.phase != "in-flight" &&
+        options.phase != "load-rig")
+        throw EmadiagError("phase \"" + options.phase + "\": expected pre-flight, post-flight, in-flight, load-rig or all");
+    check(options.rul);
+    if (!(options.horizon_cycles > 0) || !(options.horizon_cycles <= kMaxHorizonDays))
+        throw EmadiagError("horizon_cycles " + std::to_string(options.horizon_cycles) + " is not in (0, " + std::to_string(kMaxHorizonDays) + "]");
+    db::check_tail_number(tail_number);
+    const auto tails = list_tail_numbers(database);
+    if (std::find(tails.begin(), tails.end(), tail_number) == tails.end()) {
+        std::string known;
+        for (std::size_t i = 0; i < tails.size() && i < 20; ++i) known += (i ? ", " : "") + tails[i];
+        if (tails.size() > 20) known += ", ... (" + std::to_string(tails.size()) + " in all)";
+        throw EmadiagError("tail number \"" + tail_number + "\" is not in " + database.path() + " (" +
+                           (tails.empty() ? std::string("it holds no aircraft") : "its tail numbers: " + known) + ")");
+    }
+    FleetRecord r;
+    r.tail_number = tail_number;
+    r.database = database.path();
+    r.options = options;
+    auto all = db::list_test_sessions(database, tail_number);
+    r.sessions_total = static_cast<std::int64_t>(all.size());
+    std::set<std::int64_t> amended;
+    for (const auto& s : all)
+        if (s.amends_session_id) amended.insert(*s.amends_session_id);
+    r.amended_session_ids.assign(amended.begin(), amended.end());
+    {
+        std::int64_t newest = -1;
+        for (const auto& s : all)
+            if (s.session_id > newest) {
+                newest = s.session_id;
+                r.chain_head_sha256 = s.content_sha256;
+            }
+    }
+    std::vector<db::StoredTestSession> current;
+    current.reserve(all.size());
+    for (auto& s : all)
+        if (!amended.count(s.session_id)) current.push_back(std::move(s));
+    all.clear();
+    r.installations = db::list_installations(database, tail_number);
+    r.open_findings = db::list_discovery_findings(database, tail_number, true);
+
+    // Per position: the history across serials; the trends of the serial installed now.
+    std::map<std::string, std::vector<db::StoredTestSession>> by_position;
+    for (const auto& s : current) by_position[s.position.value_or(kNoPosition)].push_back(s);
+    for (auto& [position, sessions] : by_position) {
+        HistoryView v;
+        v.kind = "position";
+        v.key = position;
+        v.ata_reference = sessions.back().position_ata;
+        v.description = sessions.back().position_description;
+        v.current_serial = sessions.back().actuator_serial;
+        v.last_verdict = sessions.back().verdict;
+        for (const auto& i : r.installations)
+            if (i.position == position) v.installations.push_back(i);
+        std::vector<const db::StoredTestSession*> trend;
+        for (const auto& s : sessions)
+            if (s.actuator_serial == v.current_serial) trend.push_back(&s);
+        if (trend.size() < sessions.size())
+            v.notes.push_back("trends are those of serial " + (v.current_serial.empty() ? std::string("(unknown)") : v.current_serial) +
+                              ", installed now: " + std::to_string(sessions.size() - trend.size()) +
+                              " session(s) of earlier serials are in the history only");
+        fill_trends(v, trend, options);
+        v.sessions = std::move(sessions);
+        r.positions.push_back(std::move(v));
+    }
+    // Per serial seen on this tail: its whole history on every tail.
+    std::set<std::string> serials;
+    for (const auto& s : current)
+        if (!s.actuator_serial.empty()) serials.insert(s.actuator_serial);
+    for (const auto& serial : serials) {
+        HistoryView v;
+        v.kind = "serial";
+        v.key = serial;
+        std::vector<db::StoredTestSession> sessions;
+        std::set<std::int64_t> amended_here;
+        v.installations = db::list_installations_of_serial(database, serial);
+        db::Statement elsewhere(database, "SELECT 1 FROM test_sessions WHERE actuator_serial = ? AND tail_number != ? LIMIT 1");
+        elsewhere.bind(1, serial).bind(2, tail_number);
+        const bool only_here = !elsewhere.step();
+        std::vector<db::StoredTestSession> of_serial;
+        if (only_here) {
+            for (const auto& s : current)
+                if (s.actuator_serial == serial) of_serial.push_back(s);
+        } else {
+            of_serial = db::list_sessions_of_serial(database, serial);
+        }
+        for (const auto& s : of_serial)
+            if (s.amends_session_id) amended_here.insert(*s.amends_session_id);
+        for (auto& s : of_serial)
+            if (!amended_here.count(s.session_id)) sessions.push_back(std::move(s));
+        v.current_place = sessions.back().tail_number + " " + sessions.back().position.value_or(kNoPosition);
+        v.last_verdict = sessions.back().verdict;
+        std::set<std::string> places;
+        for (const auto& s : sessions) places.insert(s.tail_number + " " + s.position.value_or(kNoPosition));
+        if (places.size() > 1) {
+            std::string list;
+            for (const auto& p : places) list += (list.empty() ? "" : ", ") + p;
+            v.notes.push_back("installed at " + std::to_string(places.size()) + " places: " + list);
+        }
+        // A serial that never left one position has that position's trends: computed once.
+        const HistoryView* same = nullptr;
+        std::vector<std::int64_t> ids;
+        for (const auto& s : sessions)
+            if (options.phase == kPhaseAll || s.phase == options.phase) ids.push_back(s.session_id);
+        for (const auto& pv : r.positions)
+            if (pv.trend_session_ids == ids) same = &pv;
+        if (same != nullptr) {
+            v.trend_session_ids = ids;
+            v.parameters = same->parameters;
+        } else {
+            std::vector<const db::StoredTestSession*> ptrs;
+            for (const auto& s : sessions) ptrs.push_back(&s);
+            fill_trends(v, ptrs, options);
+        }
+        v.sessions = std::move(sessions);
+        r.serials.push_back(std::move(v));
+    }
+    return r;
+}
+
+json to_json(const FleetRecord& r) {
+    json j;
+    j["schema"] = kReportSchema;
+    j["version"] = kReportSchemaVersion;
+    j["tail_number"] = r.tail_number;
+    j["database"] = r.database;
+    j["phase"] = r.options.phase;
+    j["horizon"] = {{"days", r.options.rul.horizon_days}, {"cycles", r.options.horizon_cycles}};
+    j["monte_carlo"] = {{"draws", r.options.rul.draws}, {"seed", r.options.rul.seed}, {"interval", kRulIntervalLevel}};
+    j["sessions_total"] = r.sessions_total;
+    j["amended_session_ids"] = r.amended_session_ids;
+    j["chain_head_sha256"] = r.chain_head_sha256;
+    j["positions"] = json::array();
+    for (const auto& v : r.positions) j["positions"].push_back(view_json(v));
+    j["serials"] = json::array();
+    for (const auto& v : r.serials) j["serials"].push_back(view_json(v));
+    j["installations"] = json::array();
+    for (const auto& i : r.installations) j["installations"].push_back(installation_json(i));
+    j["open_discovery_findings"] = json::array();
+    for (const auto& f : r.open_findings)
+        j["open_discovery_findings"].push_back({{"finding_id", f.finding_id},
+                                                {"found_utc", f.found_utc},
+                                                {"position", f.position ? json(*f.position) : json(nullptr)},
+                                                {"actuator_serial", f.actuator_serial},
+                                                {"summary", f.summary},
+                                                {"status", f.status}});
+    return j;
+}
+
+}  // namespace emadiag::prognostics
