@@ -4,6 +4,7 @@
 // branch-free so the compiler vectorises the lane loops; decisions are selects.
 // kFull adds the effects beyond the datasheet, the truth and the energy accounts.
 #include "emadiag/sim/simulator.hpp"
+#include "term_hook.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -42,6 +43,7 @@ struct Shared {
     LoadCase load_case;
     Sequence sequence;
     Effects fx;
+    const std::vector<Term>* torque_terms;  // term_hook.hpp: scalar path only, null when none
     long steps_per_sample, steps_per_aircraft, total_samples, brk_first_hold_steps, brk_mid_hold_steps;
 };
 
@@ -238,7 +240,12 @@ inline void step(const Shared& shared, Lanes<W>& z, long n, double cmd_m) {
         if (s.fx.backlash_rad > 0.0) in_gap = vabs(z.gap) < 0.5 * s.fx.backlash_rad;
         f_r = sel(in_gap, zero, f_r);
     }
-    const D t_act = t_m - f_r;
+    // Terms as data (term_hook.hpp): an extra torque T_x, on the scalar path only.
+    D t_x = zero;
+    if constexpr (kFull && W == 1) {
+        if (s.torque_terms != nullptr) t_x = torque_terms_at(*s.torque_terms, w0, z.th, th_load * s.inv_tau, f_r, t, i1);
+    }
+    const D t_act = t_m - f_r - t_x;
     const M moving = w0 != 0.0;
     const M w_pos = w0 > 0.0;
     // Direction d = +1 where d_pos, else -1: sgn(w) while moving, sgn(T_act) (-1 at 0) while stuck.
@@ -288,7 +295,7 @@ inline void step(const Shared& shared, Lanes<W>& z, long n, double cmd_m) {
         z.e_cu += s.r * i0 * i_avg * dt;
         const D w_avg = 0.5 * (w0 + w1);
         z.e_fr += t_f * w_avg * dt;
-        z.e_load += f_r * w_avg * dt;
+        z.e_load += (f_r + t_x) * w_avg * dt;
         z.e_sat += (s.k_t * i1 - t_m) * w_avg * dt;
         // Kinetic energy removed by zeroing the speed (reversal stop and end stop).
         const D w_unclipped = sel(reversal_stop, w_free, w_before_stop);
