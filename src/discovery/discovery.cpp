@@ -41,6 +41,8 @@ constexpr double kSensitivityStepRel = 0.02;
 /// Smallest step (N m for FDJ, 1 for eta_O): a health value of 0 still gets a derivative.
 constexpr double kSensitivityStepMin = 1e-3;
 
+}  // namespace
+
 /// d T_R,model / d parameter per sample, by a forward difference of two re-simulations.
 std::vector<double> sensitivity(const Run& run, const sim::EmaParams& p, const RunSignals& model,
                                 const std::string& name) {
@@ -54,6 +56,8 @@ std::vector<double> sensitivity(const Run& run, const sim::EmaParams& p, const R
     for (std::size_t k = 0; k < col.size(); ++k) col[k] = (moved.residual_torque_nm[k] - model.residual_torque_nm[k]) / h;
     return col;
 }
+
+namespace {
 
 HealthValue* find_health(std::vector<HealthValue>& v, const char* name) {
     for (auto& h : v) {
@@ -75,6 +79,8 @@ constexpr double kSensorMinRmsFloors = kStructureMinExcessTheta;
 /// The sensor stage's offset and drift must together explain this share of the angle residual's sum
 /// of squares, and each of them this share on its own when both are kept.
 constexpr double kSensorMinExplained = 0.8;
+/// ... and only when the current and speed residuals are within this many floors (RMS).
+constexpr double kSensorOtherChannelsMax = 1.25;
 constexpr double kSensorMinShare = 0.1;
 /// Levenberg-Marquardt iterations of an alternative hypothesis' fit (it starts at the mapped value).
 constexpr int kHypothesisFitIterations = 6;
@@ -163,6 +169,16 @@ void sensor_stage(const Run& run, const RunSignals& s, const NoiseFloor& floor, 
         if (r.channel == "theta") theta = &r;
     }
     if (theta == nullptr || !theta->significant) return;
+    // A position sensor error does not move the current or the speed: the sensor stage runs only when
+    // both are at their floor (a torque the model lacks moves all three).
+    for (const auto& r : reports) {
+        if ((r.channel == "current" || r.channel == "speed") && r.rms > kSensorOtherChannelsMax * r.floor) {
+            rep.notes.push_back("position sensor stage: the angle residual is above its floor, but so is the " + r.channel +
+                                " residual (" + std::to_string(r.rms / r.floor) +
+                                " x its floor): a sensor error would not move it; not named a sensor error");
+            return;
+        }
+    }
     const double sigma2 = floor.theta_rad * floor.theta_rad;
     const double dn = static_cast<double>(n);
     // Least squares of e on {1}, {t}, {1, t}.

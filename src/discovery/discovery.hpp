@@ -93,6 +93,11 @@ struct DiscoveryReport {
     [[nodiscard]] nlohmann::json to_json() const;
 };
 
+/// d T_R,model / d parameter ("fdj_nm", "eta_o") per sample, by a forward difference of two
+/// re-simulations of `p` (`model` is the re-simulation of `p`).
+[[nodiscard]] std::vector<double> sensitivity(const Run& run, const sim::EmaParams& p, const RunSignals& model,
+                                              const std::string& name);
+
 /// Throws EmadiagError on a run that cannot be analysed (NaN, too few samples or screening
 /// samples, unknown case/sequence), naming the field, the value and the limit.
 [[nodiscard]] DiscoveryReport discover(const Run& run, const DiscoveryOptions& options = {});
