@@ -652,7 +652,14 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
         }
         // Hypotheses the torque residual cannot tell apart: fit each alternative by re-simulation and
         // compare the trajectories.
-        const std::vector<Alternative> alts = alternatives(step, p_new, p.j_kgm2, s);
+        std::vector<Alternative> alts = alternatives(step, p_new, p.j_kgm2, s);
+        // A library effect chosen over generated terms that also pass: the generated terms are a
+        // hypothesis too (a library effect can mimic them on the torque residual, e.g. viscous
+        // friction and friction ~ w^2 at the plateau speed); the trajectory decides.
+        if (step.added && gen_best != nullptr && gen_best->terms.size() == 1) {
+            const PhysicsName n = physics_name(gen_best->terms.front());
+            if (n.key != step.name_key) alts.push_back({n.key, n.text, gen_best->terms.front()});
+        }
         if (!alts.empty()) {
             Hypothesis h0{step.name_key, step.name_text, amp_text, traj_new.cost, traj_new, fit.simulations};
             step.hypotheses.push_back(h0);
