@@ -94,7 +94,9 @@ TEST(OpenWorld, AConstantTorqueIsToldApartFromSensorOffsetsByTheTrajectory) {
     EXPECT_THAT(keys, Contains("current_sensor_offset"));
     // The sensor offsets leave the motion of the real torque unexplained: far worse trajectories.
     for (const auto& h : step.hypotheses) {
-        if (h.key == "hinge_offset" || h.key == "current_sensor_offset") EXPECT_GT(h.cost, 10 * step.hypotheses[0].cost);
+        if (h.key == "hinge_offset" || h.key == "current_sensor_offset") {
+            EXPECT_GT(h.cost, 10 * step.hypotheses[0].cost);
+        }
     }
 }
 
