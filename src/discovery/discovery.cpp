@@ -653,12 +653,14 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
         // Hypotheses the torque residual cannot tell apart: fit each alternative by re-simulation and
         // compare the trajectories.
         std::vector<Alternative> alts = alternatives(step, p_new, p.j_kgm2, s);
-        // A library effect chosen over generated terms that also pass: the generated terms are a
+        // A library effect chosen over generated terms that pass the BIC: the generated terms are a
         // hypothesis too (a library effect can mimic them on the torque residual, e.g. viscous
         // friction and friction ~ w^2 at the plateau speed); the trajectory decides.
-        if (step.added && gen_best != nullptr && gen_best->terms.size() == 1) {
-            const PhysicsName n = physics_name(gen_best->terms.front());
-            if (n.key != step.name_key) alts.push_back({n.key, n.text, gen_best->terms.front()});
+        const GenericEvidence* gen_rival =
+            !step.generic.ranking.empty() && step.generic.ranking.front().delta_bic > 0 ? &step.generic.ranking.front() : nullptr;
+        if (step.added && gen_rival != nullptr && gen_rival->terms.size() == 1) {
+            const PhysicsName n = physics_name(gen_rival->terms.front());
+            if (n.key != step.name_key) alts.push_back({n.key, n.text, gen_rival->terms.front()});
         }
         if (!alts.empty()) {
             Hypothesis h0{step.name_key, step.name_text, amp_text, traj_new.cost, traj_new, fit.simulations};
@@ -724,8 +726,8 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
                 rep.model.term_keys.push_back(n.key);
                 rep.model.term_texts.push_back(n.text);
             }
-            if (gen_best != nullptr && step.name_key == physics_name(gen_best->terms.front()).key) {
-                taken_families.push_back(gen_best->family);
+            for (const GenericEvidence* g : {gen_best, gen_rival}) {
+                if (g != nullptr && step.name_key == physics_name(g->terms.front()).key) taken_families.push_back(g->family);
             }
         }
         model_sim = new_sim;

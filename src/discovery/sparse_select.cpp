@@ -200,7 +200,7 @@ GenericScreen screen_generated(const RunSignals& s, const ScreenInput& in, const
             const double rb0 = eb.squaredNorm();
             const double nb = static_cast<double>(idx.size());
             double best = -std::numeric_limits<double>::infinity();
-            std::size_t winner = lib.size();
+            double top_score = -std::numeric_limits<double>::infinity();
             for (std::size_t i = 0; i < sorted_fam.size(); ++i) {
                 const std::size_t f = sorted_fam[i];
                 if (best_cols[f].cols() == 0) continue;
@@ -209,12 +209,13 @@ GenericScreen screen_generated(const RunSignals& s, const ScreenInput& in, const
                 const Eigen::VectorXd e1 = residual_after(xr, eb);
                 const double rb1 = std::max(e1.squaredNorm(), std::numeric_limits<double>::min());
                 const double score = nb * std::log(rb0 / rb1) - (best_k[f] + lib[f].scanned) * std::log(nb);
-                if (score > best) {
-                    best = score;
-                    winner = f;
-                }
+                best = std::max(best, score);
+                if (f == top_fam) top_score = score;
             }
-            wins += winner == top_fam ? 1 : 0;
+            // The family holds in this resample when it still passes the BIC with the Bonferroni
+            // allowance and no other family beats it by more than kStabilityTie (near-equivalent
+            // families, e.g. sgn(w) w^2 and sgn(w) w^2 |F_R|, share the wins otherwise).
+            wins += top_score - 2.0 * log_g > 0 && top_score >= best - kStabilityTie ? 1 : 0;
         }
         top.stability = static_cast<double>(wins) / kStabilityResamples;
     }

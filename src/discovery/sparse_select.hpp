@@ -9,8 +9,9 @@
 //     generated library (Bonferroni for taking the best of G);
 //   - block-time cross-validation: kCvFolds contiguous folds of windows; the prediction error on the
 //     held-out folds falls with the block (cv_gain > 0);
-//   - stability under subsampling: in kStabilityResamples moving-block bootstrap resamples of the
-//     windows, the same family wins in at least kMinStability of them;
+//   - stability under subsampling: in at least kMinStability of kStabilityResamples moving-block
+//     bootstrap resamples of the windows, the family still passes the BIC (with the Bonferroni
+//     allowance) and no other family beats it by more than kStabilityTie;
 //   - peak torque |sum b_j x_j| >= kMinEffectPeakNm on the compared samples.
 #include "discovery/effect_screen.hpp"
 #include "discovery/term_library.hpp"
@@ -25,6 +26,8 @@ inline constexpr int kCvFolds = 5;
 inline constexpr int kStabilityResamples = 24;
 inline constexpr std::size_t kStabilityBlockWindows = 8;
 inline constexpr double kMinStability = 0.6;
+/// Penalised log-likelihood units by which another family may beat the best in a resample.
+inline constexpr double kStabilityTie = 2.0;
 
 struct GenericEvidence {
     std::string family;
