@@ -82,6 +82,8 @@ constexpr double kSensorMinExplained = 0.8;
 /// ... and only when the current and speed residuals are within this many floors (RMS).
 constexpr double kSensorOtherChannelsMax = 1.25;
 constexpr double kSensorMinShare = 0.1;
+/// Samples at the start of the run (before the motion) that must show a sensor offset.
+constexpr std::size_t kSensorStartSamples = 10;
 /// Levenberg-Marquardt iterations of an alternative hypothesis' fit (it starts at the mapped value).
 constexpr int kHypothesisFitIterations = 6;
 
@@ -234,6 +236,21 @@ void sensor_stage(const Run& run, const RunSignals& s, const NoiseFloor& floor, 
         if (!large(options[best])) return;
     }
     const Option& o = options[best];
+    // A sensor offset is there from the first sample, before anything moves; an angle offset that a
+    // torque the model lacks leaves builds up during the run (e.g. a position-dependent torque
+    // holding the shaft off the command at rest).
+    if (o.offset) {
+        double start = 0;
+        const std::size_t m = std::min<std::size_t>(kSensorStartSamples, n);
+        for (std::size_t k = 0; k < m; ++k) start += e[k] - (o.drift ? o.c1 * s.t_s[k] : 0.0);
+        start /= static_cast<double>(m);
+        if (std::abs(start - o.c0) > 0.5 * std::abs(o.c0)) {
+            rep.notes.push_back("position sensor stage: an angle offset of " + std::to_string(o.c0) +
+                                " rad fits the run, but the first samples show " + std::to_string(start) +
+                                " rad: it builds up during the run, so it is not a sensor offset");
+            return;
+        }
+    }
     if (o.rss > (1.0 - kSensorMinExplained) * see) {
         rep.notes.push_back("position sensor stage: an offset/drift explains only " +
                             std::to_string(100.0 * (1.0 - o.rss / see)) +
