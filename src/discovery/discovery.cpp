@@ -688,8 +688,14 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
             };
             std::vector<AltFit> alt_fits;
             for (const auto& alt : alts) {
-                AltFit af{fit_terms(p_prev, {alt.term}, kHypothesisFitIterations), {}};
-                af.sim = simulate_signals(af.fit.params);
+                AltFit af;
+                try {
+                    af.fit = fit_terms(p_prev, {alt.term}, kHypothesisFitIterations);
+                    af.sim = simulate_signals(af.fit.params);
+                } catch (const std::exception& e) {  // the alternative cannot be simulated: it is not a hypothesis
+                    rep.notes.push_back("hypothesis " + alt.key + " (" + alt.term.text() + ") dropped: " + e.what());
+                    continue;
+                }
                 const TrajectoryError te = trajectory_error(s, af.sim, floor);
                 step.hypotheses.push_back({alt.key, alt.text, af.fit.params.terms.back().text(), te.cost, te,
                                            af.fit.simulations});
@@ -717,8 +723,10 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
             }
             std::stable_sort(step.hypotheses.begin(), step.hypotheses.end(),
                              [](const Hypothesis& a, const Hypothesis& b) { return a.cost < b.cost; });
-            const double c1 = step.hypotheses[0].cost, c2 = step.hypotheses[1].cost;
-            step.equivalent = c2 < kHypothesisRatio * c1 || c2 - c1 < kHypothesisMinCostGap;
+            if (step.hypotheses.size() >= 2) {
+                const double c1 = step.hypotheses[0].cost, c2 = step.hypotheses[1].cost;
+                step.equivalent = c2 < kHypothesisRatio * c1 || c2 - c1 < kHypothesisMinCostGap;
+            }
         }
         if (!(traj_new.cost < traj_now.cost)) {
             rep.model.terms.resize(model_terms_before);

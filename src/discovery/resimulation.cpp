@@ -22,7 +22,7 @@ struct ParamSpec {
 };
 constexpr ParamSpec kSpecs[] = {
     {"fdj_nm", 0.0, 10.0, 2e-4},
-    {"eta_o", 0.3, 1.0, 2e-3},
+    {"eta_o", 0.3, 0.9999, 2e-3},  // below 1: eq. (4) gives eta_A = 1 at eta_O = 1, outside the simulator range
     {"viscous", 0.0, 1.0, 1e-7},
     {"stribeck_amplitude", 0.0, 10.0, 2e-3},
     {"stribeck_speed", 1.0, 1e4, 1.0},
