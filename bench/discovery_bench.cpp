@@ -1,63 +1,84 @@
-// Discovery on seeded runs (docs/discovery.md "Figures"): N DYN case B runs per true effect with
-// random magnitudes, plus clean runs; prints the confusion matrix (true effect vs the first effect
-// discovered), the coefficient errors, the error ratios before/after, and the false discoveries.
-// Spall centres are drawn inside the surface angles a DYN case B run visits (-11.9 to 3.4 deg): a
-// spall elsewhere leaves no trace in the run and cannot be found.
-// Usage: discovery_bench [runs_per_effect=6] [seed=11] [noise=typical|none] [effects=all|none,viscous,...]
+// Open-world discovery on seeded runs (docs/discovery.md "Figures"; issue 10): one row per run with
+// the injected effect and its magnitude, what discovery named (or the unexplained structure and the
+// variable it depends on most), the current error and the trajectory cost before/after, FDJ
+// before/after (truth 0.08 N m, the datasheet), and the time of one discover().
+// Sets (tests/support/discovery_cases.hpp): the 7 library effects, the development cases, the
+// held-out cases (never used to tune), and clean runs (false claims).
+// Usage: discovery_bench [runs_per_case=1] [seed=11] [noise=typical|none] [sets=library,dev,heldout,clean]
+//                        [clean_runs=10] [plot_dir=]
+// With plot_dir, the SVG of every unexplained structure is written there (CASE_SEED.svg).
+#include "../tests/support/discovery_cases.hpp"
 #include "core/sim_run.hpp"
-#include "discovery/candidate_effect.hpp"
 #include "discovery/discovery.hpp"
+#include "discovery/residual_plot.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <fstream>
 #include <map>
 #include <random>
+#include <sstream>
 #include <string>
 #include <vector>
 
 namespace {
 
 using emadiag::discovery::DiscoveryReport;
+namespace tc = emadiag::testcases;
 
-/// Uniform on [lo, hi) from the top 53 bits (the same on every standard library).
-double uniform(std::mt19937_64& g, double lo, double hi) {
-    return lo + (hi - lo) * static_cast<double>(g() >> 11) * 0x1.0p-53;
-}
+constexpr double kTrueFdjNm = 0.08;
 
-struct Truth {
-    std::string kind;  ///< discovery effect name, or "none"
-    std::vector<std::pair<std::string, double>> effects;
-    std::string key;   ///< the sim effect whose value is compared
-    double value = 0;
+struct Case {
+    std::string set, id, expected, variables;  ///< expected name key; acceptable variables of unexplained structure
+    emadiag::sim::SimConfig config;
+    std::string injected;                       ///< text of the injected effect with its magnitude
 };
 
-Truth draw(const std::string& kind, std::mt19937_64& g) {
-    Truth t;
-    t.kind = kind;
-    const double sign = uniform(g, 0, 1) < 0.5 ? -1.0 : 1.0;
-    if (kind == "viscous") {
-        t.effects = {{"viscous", uniform(g, 2e-5, 1e-4)}};
-    } else if (kind == "stribeck") {
-        t.effects = {{"stribeck_amplitude", uniform(g, 0.03, 0.1)}, {"stribeck_speed", uniform(g, 30, 100)}};
-    } else if (kind == "spall") {
-        t.effects = {{"spall_amplitude", uniform(g, 0.03, 0.1)}, {"spall_center", uniform(g, -10, 2)},
-                     {"spall_width", uniform(g, 0.5, 2.0)}};
-    } else if (kind == "ripple") {
-        t.effects = {{"ripple_amplitude", uniform(g, 0.03, 0.1)}, {"ripple_periods", 6.0}};
-    } else if (kind == "current_gain_error") {
-        t.effects = {{"current_gain_error", sign * uniform(g, 0.02, 0.06)}};
-    } else if (kind == "hinge_offset") {
-        t.effects = {{"hinge_offset", sign * uniform(g, 40, 150)}};
-    } else if (kind == "inertia") {
-        t.effects = {{"true_inertia", emadiag::sim::EmaParams{}.j_kgm2 * uniform(g, 1.1, 1.3)}};
+/// Library effects (the simulator's sim::Effects), drawn as in the previous bench.
+Case library_case(const std::string& kind, std::mt19937_64& g) {
+    Case c;
+    c.set = "library";
+    c.id = kind;
+    c.expected = kind;
+    c.config.load_case = emadiag::sim::LoadCase::B;
+    c.config.sequence = emadiag::sim::Sequence::Dyn;
+    const double sign = tc::uniform(g, 0, 1) < 0.5 ? -1.0 : 1.0;
+    std::vector<std::pair<std::string, double>> fx;
+    if (kind == "viscous") fx = {{"viscous", tc::uniform(g, 2e-5, 1e-4)}};
+    if (kind == "stribeck") fx = {{"stribeck_amplitude", tc::uniform(g, 0.03, 0.1)}, {"stribeck_speed", tc::uniform(g, 30, 100)}};
+    if (kind == "spall")
+        fx = {{"spall_amplitude", tc::uniform(g, 0.03, 0.1)}, {"spall_center", tc::uniform(g, -10, 2)}, {"spall_width", tc::uniform(g, 0.5, 2.0)}};
+    if (kind == "ripple") fx = {{"ripple_amplitude", tc::uniform(g, 0.03, 0.1)}, {"ripple_periods", 6.0}};
+    if (kind == "current_gain_error") fx = {{"current_gain_error", sign * tc::uniform(g, 0.02, 0.06)}};
+    if (kind == "hinge_offset") fx = {{"hinge_offset", sign * tc::uniform(g, 40, 150)}};
+    if (kind == "inertia") fx = {{"true_inertia", emadiag::sim::EmaParams{}.j_kgm2 * tc::uniform(g, 1.1, 1.3)}};
+    for (const auto& [k, v] : fx) {
+        c.config.params.effects.set(k, v);
+        char b[64];
+        std::snprintf(b, sizeof b, "%s%s=%.4g", c.injected.empty() ? "" : " ", k.c_str(), v);
+        c.injected += b;
     }
-    if (!t.effects.empty()) {
-        t.key = t.effects.front().first;
-        t.value = t.effects.front().second;
+    return c;
+}
+
+std::string join(const std::vector<std::string>& v, const char* sep = "+") {
+    std::string s;
+    for (const auto& x : v) s += (s.empty() ? "" : sep) + x;
+    return s;
+}
+
+bool listed(const std::string& list, const std::string& item) {
+    std::stringstream ss(list);
+    std::string x;
+    while (std::getline(ss, x, ',')) {
+        if (x == item) return true;
     }
-    return t;
+    return false;
 }
 
 double median(std::vector<double> v) {
@@ -70,106 +91,138 @@ double median(std::vector<double> v) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    const int runs = argc > 1 ? std::stoi(argv[1]) : 6;
+    const int runs = argc > 1 ? std::stoi(argv[1]) : 1;
     const std::uint64_t seed = argc > 2 ? std::stoull(argv[2]) : 11;
     const std::string noise = argc > 3 ? argv[3] : "typical";
-    std::printf("discovery_bench: %d DYN case B runs per effect, seed %llu, noise %s\n", runs,
-                static_cast<unsigned long long>(seed), noise.c_str());
+    const std::string sets = argc > 4 ? argv[4] : "library,dev,heldout,clean";
+    const int clean_runs = argc > 5 ? std::stoi(argv[5]) : 10;
+    const std::string plot_dir = argc > 6 ? argv[6] : "";
+    std::printf("discovery_bench: %d run(s) per case, seed %llu, noise %s, sets %s, %d clean runs; DYN case B 0.5 s\n",
+                runs, static_cast<unsigned long long>(seed), noise.c_str(), sets.c_str(), clean_runs);
     std::mt19937_64 g(seed);
-    std::vector<std::string> kinds = {"none",   "viscous",            "stribeck",     "spall",
-                                      "ripple", "current_gain_error", "hinge_offset", "inertia"};
-    if (argc > 4 && std::string(argv[4]) != "all") {
-        kinds.clear();
-        std::string list = argv[4];
-        for (std::size_t a = 0; a <= list.size();) {
-            const std::size_t b = std::min(list.find(',', a), list.size());
-            kinds.push_back(list.substr(a, b - a));
-            a = b + 1;
+    std::vector<Case> cases;
+    if (listed(sets, "library")) {
+        for (const char* k : {"viscous", "stribeck", "spall", "ripple", "current_gain_error", "hinge_offset", "inertia"}) {
+            for (int r = 0; r < runs; ++r) cases.push_back(library_case(k, g));
         }
     }
-    std::vector<std::string> columns = {"none",   "viscous",            "stribeck",     "spall",
-                                        "ripple", "current_gain_error", "hinge_offset", "inertia"};
-    columns.push_back("error");
-    std::map<std::string, std::map<std::string, int>> confusion;
-    std::map<std::string, std::vector<double>> coef_err, ratio_i, ratio_t, ratio_tw;
-    std::map<std::string, int> extra;
-    std::vector<double> area_err;  // Stribeck amplitude x speed  // further effects added after the first
-    std::uint64_t run_seed = seed * 1000;
-    for (const auto& kind : kinds) {
-        for (int r = 0; r < runs; ++r) {
-            const Truth t = draw(kind, g);
-            emadiag::sim::SimConfig c;
-            c.load_case = emadiag::sim::LoadCase::B;
-            c.sequence = emadiag::sim::Sequence::Dyn;
-            c.noise = emadiag::sim::parse_noise(noise);
-            c.seed = ++run_seed;
-            for (const auto& [k, v] : t.effects) c.params.effects.set(k, v);
-            const auto run = emadiag::make_run(c, emadiag::sim::simulate(c));
-            std::string found = "error";
-            try {
-                const DiscoveryReport rep = emadiag::discovery::discover(run);
-                const auto added = rep.added_effects();
-                found = added.empty() ? "none" : added.front();
-                if (added.size() > 1) ++extra[kind];
-                const auto& m = rep.model;
-                if (!added.empty()) {
-                    ratio_i[kind].push_back(m.error_before.current_rms_a / m.error_after.current_rms_a);
-                    ratio_t[kind].push_back(m.error_before.residual_torque_rms_nm / m.error_after.residual_torque_rms_nm);
-                    ratio_tw[kind].push_back(m.error_before.residual_torque_window_rms_nm /
-                                             m.error_after.residual_torque_window_rms_nm);
-                }
-                std::string fitted = "-";
-                if (found == kind && !t.key.empty()) {
-                    const double v = rep.term_value(t.key).value_or(NAN);
-                    coef_err[kind].push_back(std::abs(v - t.value) / std::abs(t.value));
-                    if (kind == "stribeck") {
-                        // The well-determined combination: the extra friction integrated over speed,
-                        // amplitude x w_s x sqrt(pi).
-                        const double area = v * rep.term_value("stribeck_speed").value_or(NAN);
-                        const double true_area = t.value * t.effects[1].second;
-                        area_err.push_back(std::abs(area - true_area) / true_area);
-                    }
-                    char b[64];
-                    std::snprintf(b, sizeof b, "%.4g", v);
-                    fitted = b;
-                }
-                std::printf("  seed %llu true %-18s %s=%-10.4g found %-18s fitted %-10s before I %.4f A T_R %.4f/%.4f N m, "
-                            "after I %.4f A T_R %.4f/%.4f N m\n",
-                            static_cast<unsigned long long>(c.seed), kind.c_str(), t.key.empty() ? "-" : t.key.c_str(),
-                            t.value, (added.empty() ? std::string("none") : [&] {
-                                std::string s;
-                                for (const auto& a : added) s += (s.empty() ? "" : "+") + a;
-                                return s;
-                            }()).c_str(),
-                            fitted.c_str(), m.error_before.current_rms_a, m.error_before.residual_torque_rms_nm,
-                            m.error_before.residual_torque_window_rms_nm, m.error_after.current_rms_a,
-                            m.error_after.residual_torque_rms_nm, m.error_after.residual_torque_window_rms_nm);
-            } catch (const std::exception& e) {
-                std::printf("  seed %llu true %s: error %s\n", static_cast<unsigned long long>(c.seed), kind.c_str(), e.what());
+    auto add_injected = [&](const char* set, const std::vector<tc::InjectedCase>& list) {
+        for (const auto& ic : list) {
+            for (int r = 0; r < runs; ++r) {
+                Case c;
+                c.set = set;
+                c.id = ic.id;
+                c.expected = ic.expected_name;
+                c.variables = ic.expected_variable;
+                const emadiag::sim::Term t = tc::draw_term(ic, g);
+                c.config = tc::case_config(ic, t, emadiag::sim::NoiseProfile::None, 0);
+                c.injected = t.text();
+                cases.push_back(c);
             }
-            ++confusion[kind][found];
+        }
+    };
+    if (listed(sets, "dev")) add_injected("dev", tc::kDevelopmentCases);
+    if (listed(sets, "heldout")) add_injected("heldout", tc::kHeldOutCases);
+    if (listed(sets, "clean")) {
+        for (int r = 0; r < clean_runs; ++r) {
+            Case c;
+            c.set = "clean";
+            c.id = "clean";
+            c.expected = "";
+            c.injected = "-";
+            cases.push_back(c);
         }
     }
-    std::printf("\nconfusion matrix (rows: true effect, columns: first effect discovered)\n%-19s", "");
-    for (const auto& col : columns) std::printf(" %6.6s", col.c_str());
-    std::printf("\n");
-    for (const auto& kind : kinds) {
-        std::printf("%-19s", kind.c_str());
-        for (const auto& col : columns) std::printf(" %6d", confusion[kind][col]);
-        std::printf("   (+%d runs with a further effect)\n", extra[kind]);
+    std::printf("\n%-8s %-26s %-44s | %-44s %-8s | %-17s | %-13s | %-15s | %s\n", "set", "case", "injected", "named",
+                "verdict", "current A bef/aft", "traj cost b/a", "FDJ N m bef/aft", "time s (wall, cpu)");
+    std::map<std::string, std::map<std::string, int>> verdicts;
+    std::vector<double> times, cpu_times;
+    std::uint64_t run_seed = seed * 1000;
+    for (auto& c : cases) {
+        c.config.noise = emadiag::sim::parse_noise(noise);
+        c.config.seed = ++run_seed;
+        const auto run = emadiag::make_run(c.config, emadiag::sim::simulate(c.config));
+        std::string named = "error", verdict = "error";
+        double i0 = NAN, i1 = NAN, c0 = NAN, c1 = NAN, f0 = NAN, f1 = NAN, secs = NAN, cpu = NAN;
+        try {
+            const auto t0 = std::chrono::steady_clock::now();
+            const std::clock_t cpu0 = std::clock();
+            const DiscoveryReport rep = emadiag::discovery::discover(run);
+            cpu = static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;
+            secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            times.push_back(secs);
+            cpu_times.push_back(cpu);
+            if (const char* dir = std::getenv("DISCOVERY_BENCH_JSON")) {
+                std::ofstream(std::string(dir) + "/" + c.id + "_" + std::to_string(c.config.seed) + ".json")
+                    << rep.to_json().dump(1);
+            }
+            const auto added = rep.added_effects();
+            named = added.empty() ? "none" : join(added);
+            bool equivalent_with_expected = false;
+            for (const auto& st : rep.steps) {
+                if (!st.equivalent) continue;
+                named += " (~" + st.hypotheses[1].key + ")";
+                for (const auto& h : st.hypotheses) equivalent_with_expected = equivalent_with_expected || h.key == c.expected;
+            }
+            const auto* u = rep.unexplained();
+            std::string uvar;
+            if (u != nullptr) {
+                uvar = u->dependence.empty() ? "?" : u->dependence.front().variable;
+                named += " | unexplained " + u->channel + " ~ " + uvar;
+                if (!plot_dir.empty()) {
+                    emadiag::discovery::ResidualPlot pl;
+                    pl.title = c.id + ": unexplained " + u->channel + " residual";
+                    pl.x_label = uvar;
+                    pl.y_label = u->channel + " residual (" + u->unit + ")";
+                    pl.x = u->x;
+                    pl.y = u->y;
+                    pl.floor = u->floor;
+                    std::ofstream(plot_dir + "/" + c.id + "_" + std::to_string(c.config.seed) + ".svg")
+                        << emadiag::discovery::residual_svg(pl);
+                }
+            }
+            const bool expected_named = std::find(added.begin(), added.end(), c.expected) != added.end();
+            const std::size_t others = added.size() - (expected_named ? 1 : 0);
+            if (c.set == "clean") {
+                verdict = added.empty() && u == nullptr ? "ok" : "CLAIM";
+            } else if (expected_named && others == 0) {
+                verdict = "named";
+            } else if (others > 0 && !equivalent_with_expected) {
+                verdict = expected_named ? "named+X" : "WRONG";
+            } else if (equivalent_with_expected) {
+                verdict = "equiv";
+            } else if (u != nullptr && listed(c.variables, uvar)) {
+                verdict = "unexpl-ok";
+            } else if (u != nullptr) {
+                verdict = "unexpl-var";
+            } else {
+                verdict = "missed";
+            }
+            i0 = rep.model.error_before.current_rms_a;
+            i1 = rep.model.error_after.current_rms_a;
+            c0 = rep.trajectory_before.cost;
+            c1 = rep.trajectory_after.cost;
+            f0 = rep.baseline_health.front().value;
+            f1 = rep.model.health.front().value;
+        } catch (const std::exception& e) {
+            named = std::string("error: ") + e.what();
+        }
+        ++verdicts[c.set][verdict];
+        std::printf("%-8s %-26s %-44s | %-44s %-8s | %.4f %.4f | %6.2f %6.2f | %.4f %.4f | %.2f (cpu %.2f)\n",
+                    c.set.c_str(), c.id.c_str(), c.injected.c_str(), named.c_str(), verdict.c_str(), i0, i1, c0, c1, f0,
+                    f1, secs, cpu);
+        std::fflush(stdout);
     }
-    std::printf("\nper true effect: median |coefficient error| (relative, when named), median ratio before/after "
-                "(current, T_R, T_R window means)\n");
-    for (const auto& kind : kinds) {
-        std::printf("  %-19s coef %6.3f (max %6.3f, n %zu)   ratio I %6.2f  T_R %6.2f  T_R window %6.2f\n", kind.c_str(),
-                    median(coef_err[kind]),
-                    coef_err[kind].empty() ? NAN : *std::max_element(coef_err[kind].begin(), coef_err[kind].end()),
-                    coef_err[kind].size(), median(ratio_i[kind]), median(ratio_t[kind]), median(ratio_tw[kind]));
+    std::printf("\nverdicts per set (named: the expected name only; equiv: reported as one of two equivalent hypotheses;\n"
+                "unexpl-ok: unexplained structure against an expected variable; WRONG: another name and not the expected;\n"
+                "named+X: the expected name and another; CLAIM: anything claimed on a clean run)\n");
+    for (const auto& [set, m] : verdicts) {
+        std::printf("  %-8s", set.c_str());
+        for (const auto& [v, n] : m) std::printf(" %s %d", v.c_str(), n);
+        std::printf("\n");
     }
-    std::printf("  stribeck amplitude x w_s: median relative error %.3f (max %.3f, n %zu)\n", median(area_err),
-                area_err.empty() ? NAN : *std::max_element(area_err.begin(), area_err.end()), area_err.size());
-    if (std::find(kinds.begin(), kinds.end(), "none") != kinds.end()) {
-        std::printf("false discoveries on clean runs: %d of %d\n", runs - confusion["none"]["none"], runs);
-    }
+    std::printf("time of one discover(): median %.2f s, max %.2f s wall; CPU median %.2f s, max %.2f s; over %zu runs\n",
+                median(times), times.empty() ? NAN : *std::max_element(times.begin(), times.end()), median(cpu_times),
+                cpu_times.empty() ? NAN : *std::max_element(cpu_times.begin(), cpu_times.end()), times.size());
     return 0;
 }

@@ -173,6 +173,13 @@ void EmaParams::validate() const {
                         fmt(e.min) + ", " + fmt(e.max) + "] " + e.unit;
         }
     }
+    for (std::size_t i = 0; i < terms.size(); ++i) {
+        try {
+            validate_term(terms[i], "terms[" + std::to_string(i) + "]");
+        } catch (const SimError& e) {
+            problems += std::string("\n  ") + e.what();
+        }
+    }
     if (!problems.empty()) throw SimError("invalid EMA parameters:" + problems);
 }
 
@@ -196,6 +203,20 @@ EmaParams EmaParams::from_json(const nlohmann::json& j, const std::string& where
                     problems += "\n  " + where + ".effects." + ekey + ": expected a number, got " + evalue.dump();
                 } else {
                     p.effects.*(e->member) = evalue.get<double>();
+                }
+            }
+            continue;
+        }
+        if (key == "terms") {
+            if (!value.is_array()) {
+                problems += "\n  " + where + ".terms: expected an array";
+                continue;
+            }
+            for (std::size_t i = 0; i < value.size(); ++i) {
+                try {
+                    p.terms.push_back(term_from_json(value[i], where + ".terms[" + std::to_string(i) + "]"));
+                } catch (const SimError& e) {
+                    problems += std::string("\n  ") + e.what();
                 }
             }
             continue;
@@ -242,6 +263,10 @@ nlohmann::json EmaParams::to_json() const {
     nlohmann::json e = nlohmann::json::object();
     for (const auto& s : kEffects) e[s.name] = effects.*(s.member);
     j["effects"] = e;
+    if (!terms.empty()) {
+        j["terms"] = nlohmann::json::array();
+        for (const auto& t : terms) j["terms"].push_back(sim::to_json(t));
+    }
     return j;
 }
 

@@ -108,6 +108,7 @@ Shared detail::make_shared(const SimConfig& c) {
     s.load_case = c.load_case;
     s.sequence = c.sequence;
     s.fx = p.effects;
+    s.torque_terms = detail::has_torque_terms(p.terms) ? &p.terms : nullptr;
     const double duration = c.duration_s > 0.0 ? c.duration_s : default_duration_s(c.sequence);
     s.steps_per_sample = steps_in(kSamplePeriodS, p.dt_s, "sample period");
     s.steps_per_aircraft = steps_in(kAircraftPeriodS, p.dt_s, "aircraft period");
@@ -138,6 +139,7 @@ void detail::finish_run(const SimConfig& config, SimResult& result) {
         result.truth.clear();
         result.energy = EnergyAccount{};
     }
+    detail::apply_sensor_terms(result.samples, config.params.terms, config.params.tau);
     apply_sensor_effects(result.samples, config.params.effects);
     apply_noise(result.samples, config.noise, config.seed);
 }
@@ -147,6 +149,10 @@ namespace {
 std::string batch_mismatch(const SimConfig& a, const SimConfig& b) {
     if (a.load_case != b.load_case) return "load_case";
     if (a.sequence != b.sequence) return "sequence";
+    if (nlohmann::json(a.params.to_json().value("terms", nlohmann::json())) !=
+        nlohmann::json(b.params.to_json().value("terms", nlohmann::json()))) {
+        return "params.terms";
+    }
     const double da = a.duration_s > 0 ? a.duration_s : default_duration_s(a.sequence);
     const double db = b.duration_s > 0 ? b.duration_s : default_duration_s(b.sequence);
     if (da != db) return "duration_s";
@@ -215,6 +221,11 @@ std::vector<SimResult> simulate_batch(const std::vector<SimConfig>& configs, uns
     }
     configs[0].params.validate();
     for (const auto& c : configs) c.params.validate();
+    // Terms (term_hook.hpp) are evaluated on the scalar path only.
+    if (!configs[0].params.terms.empty()) {
+        for (std::size_t i = 0; i < configs.size(); ++i) results[i] = simulate(configs[i]);
+        return results;
+    }
     (void)detail::make_shared(configs[0]);  // duration and step counts: throw here, not in a worker
     // One group is the chosen target's lanes x groups simulations (1 on the scalar path).
     const bool scalar = detail::batch_runs_scalar();

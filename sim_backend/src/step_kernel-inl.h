@@ -150,7 +150,13 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         if (s.fx.backlash_rad > 0.0) in_gap = vabs(z.gap) < 0.5 * s.fx.backlash_rad;
         f_r = sel(in_gap, zero, f_r);
     }
-    const D t_act = t_m - f_r;
+    // Terms as data (term_hook.hpp): an extra torque T_x, on the scalar path only.
+    D t_x = zero;
+    if constexpr (kFull && std::is_same_v<D, double>) {
+        if (s.torque_terms != nullptr)
+            t_x = detail::torque_terms_at(*s.torque_terms, w0, z.th, th_load * s.inv_tau, f_r, static_cast<double>(n) * dt, i1);
+    }
+    const D t_act = t_m - f_r - t_x;
     const M moving = vnot(w0 == 0.0);
     const M w_pos = w0 > 0.0;
     // Direction d = +1 where d_pos, else -1: sgn(w) while moving, sgn(T_act) (-1 at 0) while stuck.
@@ -200,7 +206,7 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         z.e_cu = z.e_cu + s.r * i0 * i_avg * dt;
         const D w_avg = 0.5 * (w0 + w1);
         z.e_fr = z.e_fr + t_f * w_avg * dt;
-        z.e_load = z.e_load + f_r * w_avg * dt;
+        z.e_load = z.e_load + (f_r + t_x) * w_avg * dt;
         z.e_sat = z.e_sat + (s.k_t * i1 - t_m) * w_avg * dt;
         // Kinetic energy removed by zeroing the speed (reversal stop and end stop).
         const D w_unclipped = sel(reversal_stop, w_free, w_before_stop);
@@ -369,7 +375,7 @@ inline void run_group(const SimConfig* const* configs, SimResult* const* out) {
     bool full = false;
     bool truth = false;
     for (int l = 0; l < W * G; ++l) {
-        full = full || configs[l]->record_truth || configs[l]->params.effects.any();
+        full = full || configs[l]->record_truth || configs[l]->params.effects.any() || !configs[l]->params.terms.empty();
         truth = truth || configs[l]->record_truth;
     }
     if (full) {

@@ -4,6 +4,7 @@
 // doubles (W = 1). batch_kernels.cpp instantiates the same step over Highway vectors, once per
 // instruction set (SSE4, AVX2, AVX-512, ...), and simulator.cpp picks one at run time.
 #include "emadiag/sim/simulator.hpp"
+#include "term_hook.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -42,6 +43,7 @@ struct Shared {
     LoadCase load_case;
     Sequence sequence;
     Effects fx;
+    const std::vector<Term>* torque_terms;  // term_hook.hpp: scalar path only, null when none
     long steps_per_sample, steps_per_aircraft, total_samples, brk_first_hold_steps, brk_mid_hold_steps;
 };
 

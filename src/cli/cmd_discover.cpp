@@ -1,4 +1,5 @@
-// emadiag discover RUN.csv [--json] [--out-model FILE] [--out-params FILE] [--max-effects N]:
+// emadiag discover RUN.csv... | --db FILE --tail T  [--json] [--out-model FILE] [--out-params FILE]
+//                  [--max-effects N] [--plot FILE.svg]:
 // the residual between the run and the datasheet model with the run's estimated health, traced to
 // an effect the model lacks, that effect added and fitted by re-simulation, and the error before
 // and after (docs/discovery.md). --out-model writes the augmented model JSON (apply_model reads
@@ -8,12 +9,19 @@
 #include "core/run_csv.hpp"
 #include "discovery/candidate_effect.hpp"
 #include "discovery/discovery.hpp"
+#include "discovery/multi_run.hpp"
+#include "discovery/physics_names.hpp"
+#include "discovery/residual_plot.hpp"
+#include "emadiag/db/database.hpp"
+#include "emadiag/db/run_store.hpp"
+#include "emadiag/db/record_store.hpp"
 #include "emadiag/sim/simulator.hpp"
 
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -22,6 +30,9 @@
 
 namespace emadiag::cli {
 namespace {
+
+/// Families of the generated library shown per screening in the text report.
+constexpr std::size_t kTextGenericRanking = 3;
 
 std::string fmt(double v, int digits = 4) {
     std::ostringstream os;
@@ -60,9 +71,31 @@ void print_text(std::ostream& os, const std::string& path, const discovery::Disc
                << fmt(c.amplitude) << " +/- " << fmt(c.amplitude_se, 2) << (shape.empty() ? "" : "  (" + shape + ")")
                << verdict << '\n';
         }
+        for (std::size_t i = 0; i < s.generic.ranking.size() && i < kTextGenericRanking; ++i) {
+            const auto& g = s.generic.ranking[i];
+            std::string terms;
+            for (const auto& t : g.terms) terms += (terms.empty() ? "" : " + ") + fmt(t.coefficient) + "*" + t.basis_text();
+            os << "  generated " << std::left << std::setw(27) << g.family << " dBIC " << std::setw(9) << fmt(g.delta_bic)
+               << " peak " << std::setw(9) << fmt(g.peak_torque_nm) << " N m  " << terms << "  "
+               << (g.accepted ? "passes" : "rejected") << ": " << g.reason << '\n';
+        }
+        if (s.generic.shapes > 0) {
+            os << "  (generated library: " << s.generic.shapes << " shapes; " << (s.generic.ranking.size() > kTextGenericRanking ? s.generic.ranking.size() - kTextGenericRanking : 0)
+               << " further families not shown)\n";
+        }
+        if (!s.hypotheses.empty()) {
+            os << "  hypotheses with the same torque residual, told apart by the re-simulated trajectory (cost 1 = noise floor):\n";
+            for (const auto& h : s.hypotheses) {
+                os << "    " << std::left << std::setw(24) << h.key << " cost " << std::setw(9) << fmt(h.cost) << " current "
+                   << fmt(h.error.current_a) << " A, speed " << fmt(h.error.speed_rad_s) << " rad/s, theta "
+                   << fmt(h.error.theta_rad) << " rad, load " << fmt(h.error.load_nm) << " N m  (" << h.change << ")\n";
+            }
+            os << "    " << (s.equivalent ? "EQUIVALENT on this run: both are reported" : "told apart: " + s.hypotheses.front().key)
+               << '\n';
+        }
         if (!s.rejected_by_fit.empty()) os << "  " << s.rejected_by_fit << '\n';
-        if (s.added) {
-            os << "  added " << discovery::effect_name(s.added->kind) << "; re-simulation fit (" << s.simulations
+        if (s.added || !s.added_terms.empty()) {
+            os << "  added " << s.name_key << " (" << s.name_text << "); re-simulation fit (" << s.simulations
                << " simulations):";
             for (const auto& f : s.fitted) os << ' ' << f.name << '=' << fmt(f.value, 5) << " +/- " << fmt(f.std_error, 2);
             os << '\n';
@@ -84,6 +117,11 @@ void print_text(std::ostream& os, const std::string& path, const discovery::Disc
             if (t.std_error > 0) os << " (se " << fmt(t.std_error, 3) << ")";
             os << '\n';
         }
+        for (std::size_t i = 0; i < r.model.params.terms.size(); ++i) {
+            const auto& t = r.model.params.terms[i];
+            os << "  " << t.text() << " (se " << fmt(t.std_error, 3) << "): "
+               << (i < r.model.term_texts.size() ? r.model.term_texts[i] : discovery::physics_name(t).text) << '\n';
+        }
     }
     os << "error (measured - model):\n";
     print_errors(os, "before", r.model.error_before);
@@ -95,7 +133,63 @@ void print_text(std::ostream& os, const std::string& path, const discovery::Disc
            << fmt(b.residual_torque_rms_nm / a.residual_torque_rms_nm, 3) << ", T_R means "
            << fmt(b.residual_torque_window_rms_nm / a.residual_torque_window_rms_nm, 3) << '\n';
     }
+    os << "trajectory cost (mean over current, speed, theta, load of (RMS / noise floor)^2): before "
+       << fmt(r.trajectory_before.cost) << ", after " << fmt(r.trajectory_after.cost) << '\n';
+    os << "noise floor of this run: current " << fmt(r.floor.current_a, 3) << " A, speed " << fmt(r.floor.speed_rad_s, 3)
+       << " rad/s, theta " << fmt(r.floor.theta_rad, 3) << " rad, torque window means " << fmt(r.floor.torque_window_nm, 3)
+       << " N m\n";
+    if (const auto* u = r.unexplained()) {
+        os << "UNEXPLAINED STRUCTURE in the " << u->channel << " residual: " << discovery::structure_test_text(*u) << '\n';
+        os << "  depends most on (binned variance explained):";
+        for (std::size_t i = 0; i < u->dependence.size() && i < 4; ++i) {
+            os << ' ' << u->dependence[i].variable << ' ' << fmt(u->dependence[i].variance_explained, 2);
+        }
+        os << '\n';
+    }
+    os << "summary: " << r.summary() << '\n';
     for (const auto& n : r.notes) os << "note: " << n << '\n';
+}
+
+/// The SVG of the unexplained structure, or of the torque residual when it is consistent with noise.
+std::string plot_of(const discovery::DiscoveryReport& r, const std::string& label) {
+    const discovery::StructureReport* u = r.unexplained();
+    const discovery::StructureReport* shown = u;
+    if (shown == nullptr && !r.structure.empty()) shown = &r.structure.front();
+    if (shown == nullptr || shown->x.empty()) throw EmadiagError("discover --plot: no residual to plot for " + label);
+    discovery::ResidualPlot p;
+    p.title = label + ": " + (u != nullptr ? "unexplained structure in the " : "consistent with noise: the ") + shown->channel +
+              " residual (" + fmt(shown->rms / shown->floor, 3) + " x the noise floor)";
+    p.x_label = shown->dependence.empty() ? "?" : shown->dependence.front().variable;
+    p.y_label = shown->channel + " residual, measured - model (" + shown->unit + ")" +
+                (shown->channel == "torque" ? ", means of 8 samples" : "");
+    p.x = shown->x;
+    p.y = shown->y;
+    p.floor = shown->floor;
+    return discovery::residual_svg(p);
+}
+
+/// A stored run as a Run (samples, constants, case, sequence, metadata).
+Run run_from_stored(const db::StoredRun& s) {
+    Run r;
+    r.constants = RunConstants{s.k_t_nm_per_a, s.j_kgm2, s.tau, s.sample_period_s};
+    r.load_case = s.load_case;
+    r.sequence = s.sequence;
+    const nlohmann::json meta = nlohmann::json::parse(s.meta_json, nullptr, false);
+    if (meta.is_object()) {
+        for (const auto& [k, v] : meta.items()) r.set_meta(k, v.is_string() ? v.get<std::string>() : v.dump());
+    }
+    r.set_required_meta();
+    for (const auto& x : s.samples) {
+        r.samples.push_back(RunSample{x.t_s, x.current_a, x.speed_rad_s, x.theta_m_rad, x.hinge_moment_nm, x.command_deg});
+    }
+    return r;
+}
+
+void write_text_file(const std::string& path, const std::string& text) {
+    std::ofstream out(path);
+    if (!out) throw EmadiagError("cannot write " + path);
+    out << text;
+    if (!out) throw EmadiagError("error writing " + path);
 }
 
 void write_json_file(const std::string& path, const nlohmann::json& j) {
@@ -106,48 +200,118 @@ void write_json_file(const std::string& path, const nlohmann::json& j) {
 }
 
 const bool registered = register_command(Command{
-    "discover", "Trace the residual between a run and the model to a missing effect, add it, report the error before/after",
+    "discover", "Trace the residual between run(s) and the model to what the model lacks, add it, report the error before/after",
     [](CLI::App& sub) -> std::function<int()> {
-        auto path = std::make_shared<std::string>();
+        auto paths = std::make_shared<std::vector<std::string>>();
         auto out_model = std::make_shared<std::string>();
         auto out_params = std::make_shared<std::string>();
+        auto plot = std::make_shared<std::string>();
+        auto db_path = std::make_shared<std::string>();
+        auto tail = std::make_shared<std::string>();
         auto json = std::make_shared<bool>(false);
         auto max_effects = std::make_shared<int>(discovery::kMaxEffects);
-        sub.add_option("run", *path, "Run CSV")->required();
+        sub.add_option("runs", *paths, "Run CSV file(s); several runs are also screened together");
+        sub.add_option("--db", *db_path, "Maintenance database (with --tail)")->check(CLI::ExistingFile);
+        sub.add_option("--tail", *tail, "Take the tail's stored runs from the database (oldest first)");
         sub.add_flag("--json", *json, "Print the report as JSON (docs/discovery.md)");
         sub.add_option("--out-model", *out_model, "Write the augmented model JSON here");
         sub.add_option("--out-params", *out_params, "Write the model's simulator parameters (for simulate --params)");
+        sub.add_option("--plot", *plot, "Write an SVG of the residual against the variable it depends on most");
         sub.add_option("--max-effects", *max_effects, "Most effects to add")->check(CLI::Range(0, discovery::kMaxEffects));
         return [=] {
-            const auto t0 = std::chrono::steady_clock::now();
-            const Run run = read_run_csv_file(*path);
-            const auto t1 = std::chrono::steady_clock::now();
-            const sim::SimCounters sims0 = sim::sim_counters();
+            std::vector<Run> runs;
+            std::vector<std::string> labels;
+            if (!tail->empty()) {
+                if (db_path->empty()) throw EmadiagError("discover --tail needs --db FILE");
+                db::Database database(*db_path);
+                for (const auto& listed : db::list_runs(database, *tail)) {
+                    runs.push_back(run_from_stored(db::load_run(database, listed.run_id)));
+                    labels.push_back("run " + std::to_string(listed.run_id) + " (" + listed.started_utc + ", " +
+                                     listed.sequence + ")");
+                }
+                if (runs.empty()) throw EmadiagError("discover: tail " + *tail + " has no stored runs in " + *db_path);
+            } else if (!db_path->empty()) {
+                throw EmadiagError("discover --db needs --tail T");
+            }
+            for (const auto& p : *paths) {
+                runs.push_back(read_run_csv_file(p));
+                labels.push_back(p);
+            }
+            if (runs.empty()) throw EmadiagError("discover: give run CSV file(s), or --db FILE --tail T");
             discovery::DiscoveryOptions opt;
             opt.max_effects = *max_effects;
-            const discovery::DiscoveryReport r = discovery::discover(run, opt);
-            const sim::SimCounters sims1 = sim::sim_counters();
-            const auto t2 = std::chrono::steady_clock::now();
-            if (!out_model->empty()) write_json_file(*out_model, r.model.to_json());
-            if (!out_params->empty()) write_json_file(*out_params, r.model.params.to_json());
-            if (*json) std::cout << r.to_json().dump(2) << '\n';
-            else print_text(std::cout, *path, r);
-            if (*json) return 0;  // the JSON report stays one document
-            // Where the time went.
-            const auto t3 = std::chrono::steady_clock::now();
-            const auto sec = [](auto a, auto b) { return std::chrono::duration<double>(b - a).count(); };
-            const double discovery_s = sec(t1, t2);
-            const double scalar_s = sims1.scalar_s - sims0.scalar_s;
-            const double batch_s = sims1.batch_s - sims0.batch_s;
-            const double rest_s = std::max(0.0, discovery_s - scalar_s - batch_s);
-            const auto pct = [&](double s) { return " (" + fmt(discovery_s > 0 ? 100.0 * s / discovery_s : 0.0, 3) + " %)"; };
-            std::ostream& os = std::cout;
-            os << "\ntime: " << fmt(sec(t0, t3), 3) << " s wall: reading the run " << fmt(sec(t0, t1), 2)
-               << " s, discovery " << fmt(discovery_s, 3) << " s, report " << fmt(sec(t2, t3), 2) << " s\n"
-               << "  discovery: " << sims1.scalar_runs - sims0.scalar_runs << " re-simulations on the scalar path "
-               << fmt(scalar_s, 3) << " s" << pct(scalar_s) << ", " << sims1.batch_runs - sims0.batch_runs
-               << " on the batched path (" << sim::simd_target().name << ") " << fmt(batch_s, 3) << " s" << pct(batch_s)
-               << ", screening, fits and signal processing " << fmt(rest_s, 3) << " s" << pct(rest_s) << '\n';
+            // A finding about a tail's stored runs goes into its maintenance record (open until closed).
+            auto store_finding = [&](const discovery::FindingRecord& record) {
+                if (tail->empty()) return;
+                db::Database database(*db_path);
+                db::StoredDiscoveryFinding f;
+                f.tail_number = *tail;
+                for (const auto& r : runs)
+                    if (f.actuator_serial.empty()) f.actuator_serial = r.meta_value("ema_serial_number").value_or("");
+                const std::time_t now = std::time(nullptr);
+                std::tm tm{};
+                gmtime_r(&now, &tm);
+                char buf[32];
+                std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+                f.found_utc = buf;
+                f.summary = record.summary;
+                f.model_json = record.model.dump();
+                const std::int64_t id = db::store_discovery_finding(database, f);
+                std::cerr << "discover: finding stored as discovery finding " << id << " of " << *tail << " in " << *db_path << '\n';
+            };
+            if (runs.size() == 1) {
+                const auto t0 = std::chrono::steady_clock::now();
+                const sim::SimCounters sims0 = sim::sim_counters();
+                const discovery::DiscoveryReport r = discovery::discover(runs.front(), opt);
+                const sim::SimCounters sims1 = sim::sim_counters();
+                const auto t1 = std::chrono::steady_clock::now();
+                store_finding(discovery::finding_record(r));
+                if (!out_model->empty()) write_json_file(*out_model, r.model.to_json());
+                if (!out_params->empty()) write_json_file(*out_params, r.model.params.to_json());
+                if (!plot->empty()) write_text_file(*plot, plot_of(r, labels.front()));
+                if (*json) std::cout << r.to_json().dump(2) << '\n';
+                else print_text(std::cout, labels.front(), r);
+                if (*json) return 0;  // the JSON report stays one document
+                // Where the time went.
+                const auto sec = [](auto a, auto b) { return std::chrono::duration<double>(b - a).count(); };
+                const double discovery_s = sec(t0, t1);
+                const double scalar_s = sims1.scalar_s - sims0.scalar_s;
+                const double batch_s = sims1.batch_s - sims0.batch_s;
+                const double rest_s = std::max(0.0, discovery_s - scalar_s - batch_s);
+                const auto pct = [&](double v) { return " (" + fmt(discovery_s > 0 ? 100.0 * v / discovery_s : 0.0, 3) + " %)"; };
+                std::cout << "\ntime: discovery " << fmt(discovery_s, 3) << " s wall: " << sims1.scalar_runs - sims0.scalar_runs
+                          << " re-simulations on the scalar path " << fmt(scalar_s, 3) << " s" << pct(scalar_s) << ", "
+                          << sims1.batch_runs - sims0.batch_runs << " on the batched path (" << sim::simd_target().name << ") "
+                          << fmt(batch_s, 3) << " s" << pct(batch_s) << ", screening, fits and signal processing " << fmt(rest_s, 3)
+                          << " s" << pct(rest_s) << '\n';
+                return 0;
+            }
+            const discovery::AcrossRunsReport all = discovery::discover_runs(runs, labels, opt);
+            const discovery::FindingRecord record = discovery::finding_record(all);
+            store_finding(record);
+            if (!out_model->empty()) write_json_file(*out_model, record.model);
+            if (!out_params->empty()) {
+                write_json_file(*out_params, all.reports.front().model.params.to_json());
+            }
+            if (!plot->empty()) {
+                std::size_t pick = 0;
+                for (std::size_t i = 0; i < all.reports.size(); ++i) {
+                    if (all.reports[i].unexplained() != nullptr) {
+                        pick = i;
+                        break;
+                    }
+                }
+                write_text_file(*plot, plot_of(all.reports[pick], all.labels[pick]));
+            }
+            if (*json) {
+                std::cout << all.to_json().dump(2) << '\n';
+            } else {
+                for (std::size_t i = 0; i < all.reports.size(); ++i) {
+                    print_text(std::cout, all.labels[i], all.reports[i]);
+                    std::cout << '\n';
+                }
+                std::cout << "=== across " << all.reports.size() << " runs ===\n" << all.summary();
+            }
             return 0;
         };
     }});

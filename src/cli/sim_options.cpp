@@ -15,6 +15,9 @@ void add_simulation_options(CLI::App& sub, SimulateOptions& o) {
     sub.add_option("--eta-o", o.eta_o, "Efficiency under opposing load (eta_A from eq. 4)");
     sub.add_option("--params", o.params_file, "Parameter JSON file (datasheet by default)")->check(CLI::ExistingFile);
     sub.add_option("--effect", o.effects, "Effect beyond the datasheet, NAME=VALUE (repeatable)");
+    sub.add_option("--term", o.terms,
+                   "Extra torque or sensor term, e.g. 'torque: 0.02*sgn(w)*abs(theta_u)' or 'current: 0.05' (repeatable; "
+                   "docs/discovery.md)");
     sub.add_option("--noise", o.noise, "Noise profile: none or typical")->capture_default_str();
     sub.add_option("--seed", o.seed, "Noise seed")->capture_default_str();
 }
@@ -47,6 +50,7 @@ sim::SimConfig config_from(const SimulateOptions& o) {
         }
         c.params.effects.set(e.substr(0, eq), v);
     }
+    for (const auto& t : o.terms) c.params.terms.push_back(sim::parse_term(t));
     c.params.validate();
     c.load_case = sim::parse_load_case(o.load_case);
     c.sequence = sim::parse_sequence(o.sequence);

@@ -17,6 +17,7 @@ struct SimulateOptions {
     std::optional<double> fdj, fsj, eta_a, eta_o;
     std::string params_file;
     std::vector<std::string> effects;
+    std::vector<std::string> terms;  ///< --term: terms as data (emadiag/sim/terms.hpp)
     std::string noise = "none";
     std::uint64_t seed = 1;
 };

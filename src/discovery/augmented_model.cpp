@@ -27,6 +27,12 @@ nlohmann::json AugmentedModel::to_json() const {
     }
     j["terms"] = nlohmann::json::array();
     for (const auto& t : terms) j["terms"].push_back({{"effect", t.effect}, {"value", t.value}, {"std_error", t.std_error}});
+    for (std::size_t i = 0; i < params.terms.size(); ++i) {
+        nlohmann::json jt = sim::to_json(params.terms[i]);
+        if (i < term_keys.size()) jt["name"] = term_keys[i];
+        if (i < term_texts.size()) jt["physics"] = term_texts[i];
+        j["terms"].push_back(jt);
+    }
     j["error_before"] = discovery::to_json(error_before);
     j["error_after"] = discovery::to_json(error_after);
     j["sim_params"] = params.to_json();
@@ -60,11 +66,22 @@ void apply_model(const nlohmann::json& model, sim::EmaParams& params) {
     }
     if (eta_o_set && !eta_a_set) p.eta_a = sim::eta_a_from_eta_o(p.eta_o, p.tau);
     if (eta_a_set && !eta_o_set) p.eta_o = sim::eta_o_from_eta_a(p.eta_a, p.tau);
+    std::vector<sim::Term> data_terms;
+    bool has_data_terms = false;
     if (model.contains("terms")) {
         if (!model["terms"].is_array()) problems.push_back("model.terms: expected an array");
         std::size_t i = 0;
         for (const auto& t : model["terms"]) {
             const std::string where = "model.terms[" + std::to_string(i++) + "]";
+            if (t.is_object() && t.contains("basis")) {
+                has_data_terms = true;
+                try {
+                    data_terms.push_back(sim::term_from_json(t, where));
+                } catch (const std::exception& e) {
+                    problems.push_back(e.what());
+                }
+                continue;
+            }
             if (!t.is_object() || !t.contains("effect") || !t["effect"].is_string()) {
                 problems.push_back(where + ".effect: expected a string");
                 continue;
@@ -80,6 +97,7 @@ void apply_model(const nlohmann::json& model, sim::EmaParams& params) {
             }
         }
     }
+    if (has_data_terms) p.terms = data_terms;
     if (problems.empty()) {
         try {
             p.validate();

@@ -3,7 +3,9 @@
 // re-simulation through apply_model. Schema version 1 (docs/discovery.md "Model JSON"):
 //   {"version": 1, "base": "EMA-REF-1 datasheet",
 //    "health": {"FDJ_Nm": {"value", "std_error", "source"}, "FSJ_Nm": ..., "eta_O": ..., "eta_A": ...},
-//    "terms": [{"effect": "viscous_nm_s_rad", "value", "std_error"}],   (sim::Effects field names)
+//    "terms": [{"effect": "viscous_nm_s_rad", "value", "std_error"},   (sim::Effects field names)
+//              {"target": "torque", "basis": "sgn(w)*abs(theta_u)", "coefficient", "std_error",
+//               "name": "friction_deflection", "physics": "friction growing with ..."}],  (terms as data)
 //    "error_before": {...}, "error_after": {...},
 //    "sim_params": {...}}   (EmaParams::to_json(): what `emadiag simulate --params` reads)
 #include "discovery/resimulation.hpp"
@@ -36,6 +38,8 @@ struct EffectTerm {
 struct AugmentedModel {
     std::vector<HealthValue> health;
     std::vector<EffectTerm> terms;
+    /// physics_names.hpp key and text of each params.terms entry (terms as data), same order.
+    std::vector<std::string> term_keys, term_texts;
     ErrorMetrics error_before, error_after;
     /// The simulator parameters of the model (constants of the run, health, effects).
     sim::EmaParams params = sim::EmaParams::datasheet();
@@ -46,7 +50,8 @@ struct AugmentedModel {
 [[nodiscard]] nlohmann::json to_json(const ErrorMetrics& e);
 
 /// Sets the health parameters and effect terms of a model JSON on `params` (the other fields keep
-/// their values). Throws EmadiagError listing every problem: wrong version, unknown effect field,
+/// their values). Entries of "terms" with a "basis" are terms as data (emadiag/sim/terms.hpp): they
+/// replace params.terms. Throws EmadiagError listing every problem: wrong version, unknown effect field,
 /// a missing or non-numeric value, a value outside the simulator's range.
 void apply_model(const nlohmann::json& model, sim::EmaParams& params);
 

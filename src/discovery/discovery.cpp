@@ -2,6 +2,8 @@
 
 #include "core/emadiag_error.hpp"
 #include "discovery/candidate_effect.hpp"
+#include "discovery/physics_names.hpp"
+#include "discovery/term_library.hpp"
 #include "estimation/health_estimate.hpp"
 #include "estimation/physics_estimator.hpp"
 
@@ -39,6 +41,8 @@ constexpr double kSensitivityStepRel = 0.02;
 /// Smallest step (N m for FDJ, 1 for eta_O): a health value of 0 still gets a derivative.
 constexpr double kSensitivityStepMin = 1e-3;
 
+}  // namespace
+
 /// d T_R,model / d parameter per sample, by a forward difference of two re-simulations.
 std::vector<double> sensitivity(const Run& run, const sim::EmaParams& p, const RunSignals& model,
                                 const std::string& name) {
@@ -53,6 +57,8 @@ std::vector<double> sensitivity(const Run& run, const sim::EmaParams& p, const R
     return col;
 }
 
+namespace {
+
 HealthValue* find_health(std::vector<HealthValue>& v, const char* name) {
     for (auto& h : v) {
         if (h.name == name) return &h;
@@ -60,14 +66,266 @@ HealthValue* find_health(std::vector<HealthValue>& v, const char* name) {
     return nullptr;
 }
 
+
+/// Entries of the generated library's ranking written per step in the JSON report.
+constexpr std::size_t kJsonGenericRanking = 8;
+
+/// Two hypotheses are told apart by the trajectory when the worse one's cost is at least this many
+/// times the better one's and at least kHypothesisMinCostGap above it (cost 1 = the noise floor).
+constexpr double kHypothesisRatio = 1.25;
+constexpr double kHypothesisMinCostGap = 0.1;
+/// Smallest RMS (in noise floors) of a position sensor offset and drift the sensor stage adds.
+constexpr double kSensorMinRmsFloors = kStructureMinExcessTheta;
+/// The sensor stage's offset and drift must together explain this share of the angle residual's sum
+/// of squares, and each of them this share on its own when both are kept.
+constexpr double kSensorMinExplained = 0.8;
+/// ... and only when the current and speed residuals are within this many floors (RMS).
+constexpr double kSensorOtherChannelsMax = 1.25;
+constexpr double kSensorMinShare = 0.1;
+/// Samples at the start of the run (before the motion) that must show a sensor offset.
+constexpr std::size_t kSensorStartSamples = 10;
+/// Levenberg-Marquardt iterations of an alternative hypothesis' fit (it starts at the mapped value).
+constexpr int kHypothesisFitIterations = 6;
+
+std::string library_effect_text(EffectKind kind) {
+    switch (kind) {
+        case EffectKind::Viscous: return "viscous friction";
+        case EffectKind::Stribeck: return "Stribeck friction (extra friction at low speed)";
+        case EffectKind::Spall: return "localised friction (spall)";
+        case EffectKind::Ripple: return "motor torque ripple";
+        case EffectKind::CurrentGain: return "current sensor gain error";
+        case EffectKind::HingeOffset: return "hinge-moment sensor offset";
+        case EffectKind::Inertia: return "inertia off the datasheet";
+    }
+    return "?";
+}
+
+/// An explanation that leaves the same signature in the torque residual as the one found.
+struct Alternative {
+    std::string key, text;
+    sim::Term term;  ///< added to the model without the effect found (start value of its fit)
+};
+
+sim::Term make_term(sim::TermTarget target, double coefficient, std::vector<sim::TermFactor> factors) {
+    sim::Term t;
+    t.target = target;
+    t.coefficient = coefficient;
+    t.factors = std::move(factors);
+    return t;
+}
+
+/// The alternatives of a step's explanation (docs/discovery.md "Hypotheses"):
+///   constant in T_R:  hinge-moment sensor offset | constant torque | current sensor offset
+///   k_t I in T_R:     current sensor gain        | a real torque ~ I (motor torque constant)
+///   dw/dt in T_R:     inertia                    | speed sensor gain
+///   F_R in T_R:       a real torque ~ F_R        | hinge-moment sensor gain
+std::vector<Alternative> alternatives(const DiscoveryStep& step, const sim::EmaParams& fitted, double j_kgm2,
+                                      const RunSignals& s) {
+    using sim::TermBasis;
+    using sim::TermSignal;
+    using sim::TermTarget;
+    std::vector<Alternative> out;
+    auto add = [&](const sim::Term& t) {
+        const PhysicsName n = physics_name(t);
+        out.push_back({n.key, n.text, t});
+    };
+    if (step.added) {
+        switch (step.added->kind) {
+            case EffectKind::HingeOffset: {
+                const double c = -fitted.effects.hinge_offset_nm / s.tau;  // T_R shift, N m
+                add(make_term(TermTarget::Torque, c, {}));
+                add(make_term(TermTarget::Current, c / s.k_t_nm_per_a, {}));
+                break;
+            }
+            case EffectKind::CurrentGain: {
+                const double e = fitted.effects.current_gain_error;
+                add(make_term(TermTarget::Torque, s.k_t_nm_per_a * e / (1.0 + e),
+                              {{TermBasis::Identity, TermSignal::Current, 0, 0}}));
+                break;
+            }
+            case EffectKind::Inertia: {
+                const double a = fitted.effects.true_inertia_kgm2 - j_kgm2;
+                add(make_term(TermTarget::Speed, -a / j_kgm2, {{TermBasis::Identity, TermSignal::Speed, 0, 0}}));
+                break;
+            }
+            default: break;
+        }
+    } else if (step.added_terms.size() == 1 && step.name_key == "load_torque_gain") {
+        add(make_term(TermTarget::Hinge, -step.added_terms.front().coefficient * s.tau,
+                      {{TermBasis::Identity, TermSignal::LoadTorque, 0, 0}}));
+    }
+    return out;
+}
+
+/// The angle channel, which the torque residual does not see: a position sensor offset and drift
+/// (theta: c0 + c1 t), selected by the BIC on the samples against the angle's noise floor, added when
+/// the channel is significantly above its floor and the re-simulated trajectory confirms it.
+void sensor_stage(const Run& run, const RunSignals& s, const NoiseFloor& floor, const std::vector<char>& mask,
+                  sim::EmaParams& p, RunSignals& model_sim, TrajectoryError& traj_now, DiscoveryReport& rep) {
+    const std::size_t n = s.size();
+    std::vector<double> e(n);
+    for (std::size_t k = 0; k < n; ++k) e[k] = s.theta_m_rad[k] - model_sim.theta_m_rad[k];
+    const auto reports = structure_reports(s, model_sim, mask, floor);
+    const StructureReport* theta = nullptr;
+    for (const auto& r : reports) {
+        if (r.channel == "theta") theta = &r;
+    }
+    if (theta == nullptr || !theta->significant) return;
+    // A position sensor error does not move the current or the speed: the sensor stage runs only when
+    // both are at their floor (a torque the model lacks moves all three).
+    for (const auto& r : reports) {
+        if ((r.channel == "current" || r.channel == "speed") && r.rms > kSensorOtherChannelsMax * r.floor) {
+            rep.notes.push_back("position sensor stage: the angle residual is above its floor, but so is the " + r.channel +
+                                " residual (" + std::to_string(r.rms / r.floor) +
+                                " x its floor): a sensor error would not move it; not named a sensor error");
+            return;
+        }
+    }
+    const double sigma2 = floor.theta_rad * floor.theta_rad;
+    const double dn = static_cast<double>(n);
+    // Least squares of e on {1}, {t}, {1, t}.
+    double s1 = 0, st = 0, stt = 0, se = 0, ste = 0, see = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+        const double t = s.t_s[k];
+        s1 += 1;
+        st += t;
+        stt += t * t;
+        se += e[k];
+        ste += t * e[k];
+        see += e[k] * e[k];
+    }
+    struct Option {
+        bool offset, drift;
+        double c0, c1, rss;
+    };
+    std::vector<Option> options;
+    options.push_back({false, false, 0, 0, see});
+    options.push_back({true, false, se / s1, 0, see - se * se / s1});
+    options.push_back({false, true, 0, ste / stt, see - ste * ste / stt});
+    {
+        const double det = s1 * stt - st * st;
+        const double c0 = (stt * se - st * ste) / det, c1 = (s1 * ste - st * se) / det;
+        options.push_back({true, true, c0, c1, see - c0 * se - c1 * ste});
+    }
+    // Effect size of each part: RMS over the run of the offset and of the drift.
+    auto large = [&](const Option& o) {
+        double s_off = 0, s_drift = 0;
+        for (std::size_t k = 0; k < n; ++k) s_drift += std::pow(o.c1 * s.t_s[k], 2);
+        s_off = o.c0 * o.c0 * dn;
+        const double limit = kSensorMinRmsFloors * floor.theta_rad;
+        return (!o.offset || std::sqrt(s_off / dn) >= limit) && (!o.drift || std::sqrt(s_drift / dn) >= limit);
+    };
+    std::size_t best = 0;
+    double best_bic = see / sigma2;
+    for (std::size_t i = 1; i < options.size(); ++i) {
+        if (!large(options[i])) continue;
+        const double k = (options[i].offset ? 1.0 : 0.0) + (options[i].drift ? 1.0 : 0.0);
+        const double bic = std::max(options[i].rss, 0.0) / sigma2 + k * std::log(dn) + 2.0 * std::log(3.0);
+        if (bic < best_bic) {
+            best_bic = bic;
+            best = i;
+        }
+    }
+    if (best == 0) return;
+    // Both parts only when each explains a share of its own (otherwise the smaller is what the other
+    // leaves); and the sensor terms must explain most of the angle residual: a residual shaped like
+    // the speed (a lag of the closed loop behind a torque the model lacks) is not a sensor's.
+    if (options[best].offset && options[best].drift &&
+        (options[3].rss > options[1].rss - kSensorMinShare * see || options[3].rss > options[2].rss - kSensorMinShare * see)) {
+        best = options[1].rss < options[2].rss ? 1 : 2;
+        if (!large(options[best])) return;
+    }
+    const Option& o = options[best];
+    // A sensor offset is there from the first sample, before anything moves; an angle offset that a
+    // torque the model lacks leaves builds up during the run (e.g. a position-dependent torque
+    // holding the shaft off the command at rest).
+    if (o.offset) {
+        double start = 0;
+        const std::size_t m = std::min<std::size_t>(kSensorStartSamples, n);
+        for (std::size_t k = 0; k < m; ++k) start += e[k] - (o.drift ? o.c1 * s.t_s[k] : 0.0);
+        start /= static_cast<double>(m);
+        if (std::abs(start - o.c0) > 0.5 * std::abs(o.c0)) {
+            rep.notes.push_back("position sensor stage: an angle offset of " + std::to_string(o.c0) +
+                                " rad fits the run, but the first samples show " + std::to_string(start) +
+                                " rad: it builds up during the run, so it is not a sensor offset");
+            return;
+        }
+    }
+    if (o.rss > (1.0 - kSensorMinExplained) * see) {
+        rep.notes.push_back("position sensor stage: an offset/drift explains only " +
+                            std::to_string(100.0 * (1.0 - o.rss / see)) +
+                            " % of the angle residual; left as structure, not named a sensor error");
+        return;
+    }
+    sim::EmaParams q = p;
+    std::vector<sim::Term> added;
+    if (o.offset) added.push_back(make_term(sim::TermTarget::Theta, o.c0, {}));
+    if (o.drift) added.push_back(make_term(sim::TermTarget::Theta, o.c1, {{sim::TermBasis::Identity, sim::TermSignal::Time, 0, 0}}));
+    const double resid_var = std::max(o.rss, 0.0) / std::max(1.0, dn - static_cast<double>(added.size()));
+    for (auto& t : added) {
+        t.std_error = std::sqrt(resid_var / (t.factors.empty() ? s1 : stt));
+        q.terms.push_back(t);
+    }
+    const RunSignals q_sim = run_signals(resimulate(run, q));
+    const TrajectoryError te = trajectory_error(s, q_sim, floor);
+    if (!(te.cost < traj_now.cost)) {
+        rep.notes.push_back("position sensor stage: the angle residual is above its floor, but adding " +
+                            added.front().text() + " does not bring the trajectory closer (cost " +
+                            std::to_string(traj_now.cost) + " -> " + std::to_string(te.cost) + ")");
+        return;
+    }
+    for (const auto& t : added) {
+        const PhysicsName nm = physics_name(t);
+        rep.sensor_findings.push_back({nm.key, nm.text, t, traj_now.cost, te.cost});
+        rep.model.term_keys.push_back(nm.key);
+        rep.model.term_texts.push_back(nm.text);
+    }
+    p = q;
+    model_sim = q_sim;
+    traj_now = te;
+}
+
 }  // namespace
 
 std::vector<std::string> DiscoveryReport::added_effects() const {
     std::vector<std::string> v;
     for (const auto& s : steps) {
-        if (s.added) v.push_back(effect_name(s.added->kind));
+        if (s.added || !s.added_terms.empty()) v.push_back(s.name_key);
     }
+    for (const auto& f : sensor_findings) v.push_back(f.key);
     return v;
+}
+
+const StructureReport* DiscoveryReport::unexplained() const {
+    const StructureReport* best = nullptr;
+    for (const auto& r : structure) {
+        if (r.significant && (best == nullptr || r.z > best->z)) best = &r;
+    }
+    return best;
+}
+
+std::string DiscoveryReport::summary() const {
+    std::string out;
+    for (const auto& s : steps) {
+        if (!s.added && s.added_terms.empty()) continue;
+        out += (out.empty() ? "found: " : "; ") + s.name_text;
+        if (s.equivalent && s.hypotheses.size() >= 2) {
+            out += " (equivalent on this run: " + s.hypotheses[1].text + ")";
+        }
+    }
+    for (const auto& f : sensor_findings) out += (out.empty() ? "found: " : "; ") + f.text;
+    if (const StructureReport* u = unexplained()) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf, "%.2f x the noise floor (z = %.1f)", u->rms / u->floor, u->z);
+        out += std::string(out.empty() ? "" : "; ") + "unexplained structure in the " + u->channel + " residual: " + buf;
+        if (!u->dependence.empty()) {
+            std::snprintf(buf, sizeof buf, "%.2f", u->dependence.front().variance_explained);
+            out += ", depends most on " + u->dependence.front().variable + " (binned variance explained " + buf + ")";
+        }
+    } else if (out.empty()) {
+        out = "no significant discrepancy: the residual is consistent with the run's noise floor";
+    }
+    return out;
 }
 
 std::optional<double> DiscoveryReport::term_value(const std::string& sim_name) const {
@@ -108,7 +366,32 @@ nlohmann::json DiscoveryReport::to_json() const {
                                      {"passes_criterion", c.accepted},
                                      {"reason", c.reason}});
         }
-        js["added"] = s.added ? nlohmann::json(effect_name(s.added->kind)) : nlohmann::json(nullptr);
+        js["added"] = s.added || !s.added_terms.empty() ? nlohmann::json(s.name_key) : nlohmann::json(nullptr);
+        if (!s.name_text.empty()) js["physics"] = s.name_text;
+        js["added_terms"] = nlohmann::json::array();
+        for (const auto& t : s.added_terms) js["added_terms"].push_back(sim::to_json(t));
+        js["generic_ranking"] = nlohmann::json::array();
+        for (std::size_t i = 0; i < s.generic.ranking.size() && i < kJsonGenericRanking; ++i) {
+            const auto& g = s.generic.ranking[i];
+            nlohmann::json terms = nlohmann::json::array();
+            for (const auto& t : g.terms) terms.push_back(sim::to_json(t));
+            js["generic_ranking"].push_back({{"family", g.family}, {"terms", terms}, {"delta_bic", g.delta_bic},
+                                             {"explained_rms_Nm", g.explained_rms_nm}, {"peak_torque_Nm", g.peak_torque_nm},
+                                             {"cv_gain", g.checked ? nlohmann::json(g.cv_gain) : nlohmann::json(nullptr)},
+                                             {"stability", g.checked ? nlohmann::json(g.stability) : nlohmann::json(nullptr)},
+                                             {"passes_criterion", g.accepted}, {"reason", g.reason}});
+        }
+        js["generic_shapes"] = s.generic.shapes;
+        js["hypotheses"] = nlohmann::json::array();
+        for (const auto& h : s.hypotheses) {
+            js["hypotheses"].push_back({{"name", h.key}, {"physics", h.text}, {"change", h.change},
+                                        {"trajectory_cost", h.cost}, {"current_rms_A", h.error.current_a},
+                                        {"speed_rms_rad_s", h.error.speed_rad_s}, {"theta_rms_rad", h.error.theta_rad},
+                                        {"load_rms_Nm", h.error.load_nm}});
+        }
+        if (!s.hypotheses.empty()) js["hypotheses_equivalent"] = s.equivalent;
+        js["trajectory_cost_before"] = s.trajectory_before;
+        js["trajectory_cost_after"] = s.trajectory_after;
         if (!s.rejected_by_fit.empty()) js["rejected_by_fit"] = s.rejected_by_fit;
         js["fitted"] = nlohmann::json::array();
         for (const auto& f : s.fitted) js["fitted"].push_back({{"name", f.name}, {"value", f.value}, {"std_error", f.std_error}});
@@ -124,6 +407,26 @@ nlohmann::json DiscoveryReport::to_json() const {
         {"residual_torque_rms", ratio(model.error_before.residual_torque_rms_nm, model.error_after.residual_torque_rms_nm)},
         {"residual_torque_window_rms",
          ratio(model.error_before.residual_torque_window_rms_nm, model.error_after.residual_torque_window_rms_nm)}};
+    j["noise_floor"] = {{"current_A", floor.current_a}, {"speed_rad_s", floor.speed_rad_s}, {"theta_rad", floor.theta_rad},
+                        {"load_Nm", floor.load_nm}, {"torque_window_Nm", floor.torque_window_nm}};
+    j["sensor_findings"] = nlohmann::json::array();
+    for (const auto& f : sensor_findings) {
+        j["sensor_findings"].push_back({{"name", f.key}, {"physics", f.text}, {"term", sim::to_json(f.term)},
+                                        {"trajectory_cost_before", f.cost_before}, {"trajectory_cost_after", f.cost_after}});
+    }
+    j["trajectory_cost_before"] = trajectory_before.cost;
+    j["trajectory_cost_after"] = trajectory_after.cost;
+    j["residual_structure"] = nlohmann::json::array();
+    for (const auto& r : structure) {
+        nlohmann::json dep = nlohmann::json::array();
+        for (const auto& d : r.dependence) dep.push_back({{"variable", d.variable}, {"variance_explained", d.variance_explained}});
+        j["residual_structure"].push_back({{"channel", r.channel}, {"unit", r.unit}, {"rms", r.rms}, {"noise_floor", r.floor},
+                                           {"chi2", r.chi2}, {"z", r.z}, {"n", r.n}, {"significant", r.significant},
+                                           {"test", structure_test_text(r)}, {"dependence", dep}});
+    }
+    const StructureReport* u = unexplained();
+    j["unexplained"] = u != nullptr ? nlohmann::json(u->channel) : nlohmann::json(nullptr);
+    j["summary"] = summary();
     j["notes"] = notes;
     return j;
 }
@@ -190,80 +493,41 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
     std::vector<std::string> health_names = {"fdj_nm"};
     if (eta_free) health_names.push_back("eta_o");
     std::vector<EffectShape> accepted;
+    std::vector<EffectKind> excluded;
+    std::vector<std::vector<double>> term_columns;  // signatures of the added terms as data
+    std::vector<std::string> taken_families;
+    const std::vector<TermFamily> library = options.open_world ? generated_library(s) : std::vector<TermFamily>{};
+    const NoiseFloor floor = noise_floor(s, base_sim, mask);
+    rep.floor = floor;
     RunSignals model_sim = base_sim;
-    for (int round = 0; round < options.max_effects; ++round) {
-        DiscoveryStep step;
-        ScreenInput in;
-        in.mask = mask;
-        in.residual_nm.resize(s.size());
-        for (std::size_t k = 0; k < s.size(); ++k) in.residual_nm[k] = s.residual_torque_nm[k] - model_sim.residual_torque_nm[k];
-        for (const auto& name : health_names) in.base_columns.push_back(sensitivity(run, p, model_sim, name));
-        for (const auto& a : accepted) {
-            in.base_columns.push_back(signature(s, a));
-            in.exclude.push_back(a.kind);
+    TrajectoryError traj_now = trajectory_error(s, base_sim, floor);
+    rep.trajectory_before = traj_now;
+    auto simulate_signals = [&](const sim::EmaParams& q) { return run_signals(resimulate(run, q)); };
+    auto peak_of = [&](const std::vector<sim::Term>& terms) {
+        std::vector<double> sum(s.size(), 0.0);
+        for (const auto& t : terms) {
+            const auto x = term_signature(s, t);
+            for (std::size_t k = 0; k < x.size(); ++k) sum[k] += x[k];
         }
-        step.screen = screen_effects(s, in);
-        const auto& ranking = step.screen.ranking;
-        if (ranking.empty() || !ranking.front().accepted) {
-            rep.steps.push_back(std::move(step));
-            break;
-        }
-        const CandidateEvidence& win = ranking.front();
-        sim::EmaParams start = p;
-        start.fsj_nm = std::max(fsj_base_nm, start.fdj_nm);
-        for (const auto& [name, value] : sim_effects(win.shape, win.amplitude, p.j_kgm2)) {
-            if (name == "ripple_periods") start.effects.set(name, value);  // scanned, not fitted
-            else set_parameter(start, name, value);
-        }
-        std::vector<std::string> names = health_names;
-        for (const auto& n : fitted_sim_effects(win.shape.kind)) names.push_back(n);
-        // Ripple changes sign within a window of samples: it is fitted per sample.
-        const FitResult fit = fit_by_resimulation(run, s, start, names, mask, fsj_base_nm,
-                                                  win.shape.kind == EffectKind::Ripple ? 1 : kFitWindowSamples, &p);
-        step.fitted = fit.values;
-        step.simulations = fit.simulations;
-        // The fit must confirm the screening with the same criterion on the re-simulated cost (the
-        // model without the effect against the fitted model): delta_BIC > kMinDeltaBic and a peak
-        // torque of at least kMinEffectPeakNm. Otherwise the effect is not added.
-        const FittedValue& amp = fit.values[health_names.size()];
-        const double rows = static_cast<double>(fit.rows);
-        const double grid = static_cast<double>(std::max<std::size_t>(1, shape_grid(win.shape.kind, s).size()));
-        const double fit_bic = rows * std::log(fit.cost_reference / fit.cost_end) -
-                               (1.0 + scanned_parameters(win.shape.kind)) * std::log(rows) - 2.0 * std::log(grid);
-        EffectShape fitted_shape = win.shape;
-        if (fitted_shape.kind == EffectKind::Stribeck) fitted_shape.shape1 = fit.params.effects.stribeck_speed_rad_s;
-        if (fitted_shape.kind == EffectKind::Spall) {
-            fitted_shape.shape1 = fit.params.effects.spall_center_deg;
-            fitted_shape.shape2 = fit.params.effects.spall_width_deg;
-        }
-        const double a = signature_amplitude(fitted_shape.kind, amp.value, p.j_kgm2);
         double peak = 0;
-        {
-            const auto x = signature(s, fitted_shape);
-            for (std::size_t k = 0; k < x.size(); ++k) {
-                if (mask[k]) peak = std::max(peak, std::abs(x[k]));
-            }
+        for (std::size_t k = 0; k < sum.size(); ++k) {
+            if (mask[k]) peak = std::max(peak, std::abs(sum[k]));
         }
-        step.fit_delta_bic = fit_bic;
-        if (!(fit_bic > kMinDeltaBic) || !(std::abs(a) * peak >= kMinEffectPeakNm)) {
-            step.rejected_by_fit = effect_name(win.shape.kind) + ": the re-simulation fit gives " + amp.name + " = " +
-                                   std::to_string(amp.value) + " +/- " + std::to_string(amp.std_error) +
-                                   ", delta BIC " + std::to_string(fit_bic) + ", peak torque " +
-                                   std::to_string(std::abs(a) * peak) + " N m; not confirmed";
-            rep.notes.push_back(step.rejected_by_fit);
-            rep.steps.push_back(std::move(step));
-            break;
+        return peak;
+    };
+    // Fits `extra` (terms as data) added to `base` by re-simulation, with the health parameters.
+    auto fit_terms = [&](const sim::EmaParams& base, const std::vector<sim::Term>& extra,
+                         int max_iterations = kMaxFitIterations) {
+        sim::EmaParams start = base;
+        start.fsj_nm = std::max(fsj_base_nm, start.fdj_nm);
+        std::vector<std::string> names = health_names;
+        for (const auto& t : extra) {
+            names.push_back(term_parameter(start.terms.size()));
+            start.terms.push_back(t);
         }
-        step.added = win.shape;
-        p = fit.params;
-        // The accepted shape with the fitted continuous shape parameters, for the next screening.
-        EffectShape shape = win.shape;
-        if (shape.kind == EffectKind::Stribeck) shape.shape1 = p.effects.stribeck_speed_rad_s;
-        if (shape.kind == EffectKind::Spall) {
-            shape.shape1 = p.effects.spall_center_deg;
-            shape.shape2 = p.effects.spall_width_deg;
-        }
-        accepted.push_back(shape);
+        return fit_by_resimulation(run, s, start, names, mask, fsj_base_nm, kFitWindowSamples, &base, max_iterations);
+    };
+    auto record_health = [&](const FitResult& fit) {
         for (const auto& f : fit.values) {
             if (f.name == "fdj_nm") {
                 auto* h = find_health(health, kParamFdj);
@@ -275,26 +539,234 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
                 h->value = f.value;
                 h->std_error = f.std_error;
                 h->source = "refit";
-                // eq. (4): se of eta_A from the slope d eta_A / d eta_O.
                 constexpr double kSlopeStep = 1e-6;
-                const double slope = (sim::eta_a_from_eta_o(p.eta_o + kSlopeStep, p.tau) -
-                                      sim::eta_a_from_eta_o(p.eta_o - kSlopeStep, p.tau)) / (2 * kSlopeStep);
+                const double slope = (sim::eta_a_from_eta_o(fit.params.eta_o + kSlopeStep, fit.params.tau) -
+                                      sim::eta_a_from_eta_o(fit.params.eta_o - kSlopeStep, fit.params.tau)) /
+                                     (2 * kSlopeStep);
                 auto* eta_a_value = find_health(health, kParamEtaA);
-                eta_a_value->value = p.eta_a;
+                eta_a_value->value = fit.params.eta_a;
                 eta_a_value->std_error = std::abs(slope) * f.std_error;
-            } else {
-                rep.model.terms.push_back({effect_field(f.name), f.value, f.std_error});
             }
         }
-        if (shape.kind == EffectKind::Ripple) {
-            rep.model.terms.push_back({effect_field("ripple_periods"), shape.shape1, 0.0});
+        find_health(health, kParamFsj)->value = fit.params.fsj_nm;
+    };
+    // The term coefficients' standard errors from a fit, onto the model's terms.
+    auto record_term_errors = [](sim::EmaParams& q, const FitResult& fit) {
+        for (const auto& f : fit.values) {
+            if (is_term_parameter(f.name)) q.terms[std::stoul(f.name.substr(5))].std_error = f.std_error;
         }
-        find_health(health, kParamFsj)->value = p.fsj_nm;
-        model_sim = run_signals(resimulate(run, p));
+    };
+    for (int round = 0; round < options.max_effects; ++round) {
+        DiscoveryStep step;
+        ScreenInput in;
+        in.mask = mask;
+        in.residual_nm.resize(s.size());
+        for (std::size_t k = 0; k < s.size(); ++k) in.residual_nm[k] = s.residual_torque_nm[k] - model_sim.residual_torque_nm[k];
+        for (const auto& name : health_names) in.base_columns.push_back(sensitivity(run, p, model_sim, name));
+        for (const auto& a : accepted) {
+            in.base_columns.push_back(signature(s, a));
+            in.exclude.push_back(a.kind);
+        }
+        for (EffectKind k : excluded) in.exclude.push_back(k);
+        for (const auto& c : term_columns) in.base_columns.push_back(c);
+        step.screen = screen_effects(s, in);
+        std::vector<TermFamily> open_library;
+        for (const auto& f : library) {
+            if (std::find(taken_families.begin(), taken_families.end(), f.name) == taken_families.end()) open_library.push_back(f);
+        }
+        if (!open_library.empty()) step.generic = screen_generated(s, in, open_library, static_cast<std::uint64_t>(round) + 1);
+        const auto& ranking = step.screen.ranking;
+        const CandidateEvidence* lib_best = !ranking.empty() && ranking.front().accepted ? &ranking.front() : nullptr;
+        const GenericEvidence* gen_best =
+            !step.generic.ranking.empty() && step.generic.ranking.front().accepted ? &step.generic.ranking.front() : nullptr;
+        if (lib_best == nullptr && gen_best == nullptr) {
+            rep.steps.push_back(std::move(step));
+            break;
+        }
+        step.trajectory_before = traj_now.cost;
+        const sim::EmaParams p_prev = p;
+        const std::size_t model_terms_before = rep.model.terms.size();
+        sim::EmaParams p_new;
+        FitResult fit;
+        double fit_bic = 0, peak = 0;
+        std::string amp_text;
+        if (gen_best != nullptr && (lib_best == nullptr || gen_best->delta_bic > lib_best->delta_bic)) {
+            // Open world: the generated terms, fitted by re-simulation.
+            fit = fit_terms(p, gen_best->terms);
+            const auto k = static_cast<double>(gen_best->terms.size());
+            int scanned = 0;
+            for (const auto& f : library) {
+                if (f.name == gen_best->family) scanned = f.scanned;
+            }
+            const double rows = static_cast<double>(fit.rows);
+            fit_bic = rows * std::log(fit.cost_reference / fit.cost_end) - (k + scanned) * std::log(rows) -
+                      2.0 * std::log(static_cast<double>(std::max<std::size_t>(1, step.generic.shapes)));
+            std::vector<sim::Term> fitted(fit.params.terms.end() - static_cast<std::ptrdiff_t>(gen_best->terms.size()),
+                                          fit.params.terms.end());
+            peak = peak_of(fitted);
+            step.added_terms = fitted;
+            const PhysicsName name = physics_name(fitted.front());
+            step.name_key = name.key;
+            step.name_text = name.text;
+            for (const auto& t : fitted) amp_text += (amp_text.empty() ? "" : ", ") + t.text();
+        } else {
+            const CandidateEvidence& win = *lib_best;
+            sim::EmaParams start = p;
+            start.fsj_nm = std::max(fsj_base_nm, start.fdj_nm);
+            for (const auto& [name, value] : sim_effects(win.shape, win.amplitude, p.j_kgm2)) {
+                if (name == "ripple_periods") start.effects.set(name, value);  // scanned, not fitted
+                else set_parameter(start, name, value);
+            }
+            std::vector<std::string> names = health_names;
+            for (const auto& n : fitted_sim_effects(win.shape.kind)) names.push_back(n);
+            // Ripple changes sign within a window of samples: it is fitted per sample.
+            fit = fit_by_resimulation(run, s, start, names, mask, fsj_base_nm,
+                                      win.shape.kind == EffectKind::Ripple ? 1 : kFitWindowSamples, &p);
+            const FittedValue& amp = fit.values[health_names.size()];
+            const double rows = static_cast<double>(fit.rows);
+            const double grid = static_cast<double>(std::max<std::size_t>(1, shape_grid(win.shape.kind, s).size()));
+            fit_bic = rows * std::log(fit.cost_reference / fit.cost_end) -
+                      (1.0 + scanned_parameters(win.shape.kind)) * std::log(rows) - 2.0 * std::log(grid);
+            EffectShape fitted_shape = win.shape;
+            if (fitted_shape.kind == EffectKind::Stribeck) fitted_shape.shape1 = fit.params.effects.stribeck_speed_rad_s;
+            if (fitted_shape.kind == EffectKind::Spall) {
+                fitted_shape.shape1 = fit.params.effects.spall_center_deg;
+                fitted_shape.shape2 = fit.params.effects.spall_width_deg;
+            }
+            const double a = signature_amplitude(fitted_shape.kind, amp.value, p.j_kgm2);
+            const auto x = signature(s, fitted_shape);
+            for (std::size_t k = 0; k < x.size(); ++k) {
+                if (mask[k]) peak = std::max(peak, std::abs(a * x[k]));
+            }
+            step.added = fitted_shape;
+            step.name_key = effect_name(win.shape.kind);
+            step.name_text = library_effect_text(win.shape.kind);
+            amp_text = amp.name + " = " + std::to_string(amp.value) + " +/- " + std::to_string(amp.std_error);
+        }
+        step.fitted = fit.values;
+        step.simulations = fit.simulations;
+        step.fit_delta_bic = fit_bic;
+        p_new = fit.params;
+        RunSignals new_sim = simulate_signals(p_new);
+        TrajectoryError traj_new = trajectory_error(s, new_sim, floor);
+        // The fit must confirm the screening with the same criterion on the re-simulated cost (the
+        // model without the effect against the fitted model) and a peak torque of at least
+        // kMinEffectPeakNm; then the best hypothesis must bring the re-simulated trajectory closer.
+        const bool bic_ok = fit_bic > kMinDeltaBic && peak >= kMinEffectPeakNm;
+        auto reject = [&](const std::string& why) {
+            step.rejected_by_fit = step.name_key + ": the re-simulation fit gives " + amp_text + ", delta BIC " +
+                                   std::to_string(fit_bic) + ", peak torque " + std::to_string(peak) +
+                                   " N m, trajectory cost " + std::to_string(traj_now.cost) + " -> " +
+                                   std::to_string(traj_new.cost) + "; not confirmed" + why;
+            step.added.reset();
+            step.added_terms.clear();
+            rep.notes.push_back(step.rejected_by_fit);
+            rep.steps.push_back(std::move(step));
+        };
+        if (!bic_ok) {
+            reject("");
+            break;
+        }
+        // Hypotheses the torque residual cannot tell apart: fit each alternative by re-simulation and
+        // compare the trajectories.
+        std::vector<Alternative> alts = alternatives(step, p_new, p.j_kgm2, s);
+        // A library effect chosen over generated terms that pass the BIC: the generated terms are a
+        // hypothesis too (a library effect can mimic them on the torque residual, e.g. viscous
+        // friction and friction ~ w^2 at the plateau speed); the trajectory decides.
+        const GenericEvidence* gen_rival =
+            !step.generic.ranking.empty() && step.generic.ranking.front().delta_bic > 0 ? &step.generic.ranking.front() : nullptr;
+        if (step.added && gen_rival != nullptr && gen_rival->terms.size() == 1) {
+            const PhysicsName n = physics_name(gen_rival->terms.front());
+            if (n.key != step.name_key) alts.push_back({n.key, n.text, gen_rival->terms.front()});
+        }
+        if (!alts.empty()) {
+            Hypothesis h0{step.name_key, step.name_text, amp_text, traj_new.cost, traj_new, fit.simulations};
+            step.hypotheses.push_back(h0);
+            struct AltFit {
+                FitResult fit;
+                RunSignals sim;
+            };
+            std::vector<AltFit> alt_fits;
+            for (const auto& alt : alts) {
+                AltFit af;
+                try {
+                    af.fit = fit_terms(p_prev, {alt.term}, kHypothesisFitIterations);
+                    af.sim = simulate_signals(af.fit.params);
+                } catch (const std::exception& e) {  // the alternative cannot be simulated: it is not a hypothesis
+                    rep.notes.push_back("hypothesis " + alt.key + " (" + alt.term.text() + ") dropped: " + e.what());
+                    continue;
+                }
+                const TrajectoryError te = trajectory_error(s, af.sim, floor);
+                step.hypotheses.push_back({alt.key, alt.text, af.fit.params.terms.back().text(), te.cost, te,
+                                           af.fit.simulations});
+                step.simulations += af.fit.simulations;
+                alt_fits.push_back(std::move(af));
+            }
+            std::size_t best = 0;
+            for (std::size_t i = 1; i < step.hypotheses.size(); ++i) {
+                if (step.hypotheses[i].cost < step.hypotheses[best].cost) best = i;
+            }
+            if (best != 0) {
+                // An alternative explains the trajectory better: it replaces the first explanation.
+                const AltFit& af = alt_fits[best - 1];
+                fit = af.fit;
+                p_new = af.fit.params;
+                new_sim = af.sim;
+                traj_new = step.hypotheses[best].error;
+                if (step.added) excluded.push_back(step.added->kind);
+                step.added.reset();
+                step.added_terms = {p_new.terms.back()};
+                step.name_key = step.hypotheses[best].key;
+                step.name_text = step.hypotheses[best].text;
+                step.fitted = fit.values;
+                rep.model.terms.resize(model_terms_before);
+            }
+            std::stable_sort(step.hypotheses.begin(), step.hypotheses.end(),
+                             [](const Hypothesis& a, const Hypothesis& b) { return a.cost < b.cost; });
+            if (step.hypotheses.size() >= 2) {
+                const double c1 = step.hypotheses[0].cost, c2 = step.hypotheses[1].cost;
+                step.equivalent = c2 < kHypothesisRatio * c1 || c2 - c1 < kHypothesisMinCostGap;
+            }
+        }
+        if (!(traj_new.cost < traj_now.cost)) {
+            rep.model.terms.resize(model_terms_before);
+            reject(" by the trajectory");
+            break;
+        }
+        p = p_new;
+        record_health(fit);
+        if (step.added) {
+            EffectShape shape = *step.added;
+            accepted.push_back(shape);
+            for (const auto& f : fit.values) {
+                if (f.name != "fdj_nm" && f.name != "eta_o") rep.model.terms.push_back({effect_field(f.name), f.value, f.std_error});
+            }
+            if (shape.kind == EffectKind::Ripple) rep.model.terms.push_back({effect_field("ripple_periods"), shape.shape1, 0.0});
+        } else {
+            record_term_errors(p, fit);
+            for (std::size_t i = p.terms.size() - step.added_terms.size(); i < p.terms.size(); ++i) {
+                step.added_terms[i - (p.terms.size() - step.added_terms.size())] = p.terms[i];
+                term_columns.push_back(term_signature(s, p.terms[i]));
+                const PhysicsName n = physics_name(p.terms[i]);
+                rep.model.term_keys.push_back(n.key);
+                rep.model.term_texts.push_back(n.text);
+            }
+            for (const GenericEvidence* g : {gen_best, gen_rival}) {
+                if (g != nullptr && step.name_key == physics_name(g->terms.front()).key) taken_families.push_back(g->family);
+            }
+        }
+        model_sim = new_sim;
+        traj_now = traj_new;
+        step.trajectory_after = traj_new.cost;
         step.error_after = model_error(s, model_sim, mask);
         rep.model.error_after = step.error_after;
         rep.steps.push_back(std::move(step));
     }
+    // Sensor stage: the angle channel, which the torque residual does not see (offset and drift).
+    if (options.open_world) sensor_stage(run, s, floor, mask, p, model_sim, traj_now, rep);
+    rep.structure = structure_reports(s, model_sim, mask, floor);
+    rep.trajectory_after = traj_now;
+    rep.model.error_after = model_error(s, model_sim, mask);
     rep.model.params = p;
     return rep;
 }

@@ -14,6 +14,8 @@
 #include "discovery/augmented_model.hpp"
 #include "discovery/effect_screen.hpp"
 #include "discovery/resimulation.hpp"
+#include "discovery/sparse_select.hpp"
+#include "discovery/trajectory.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -28,12 +30,30 @@ inline constexpr int kMaxEffects = 3;
 
 struct DiscoveryOptions {
     int max_effects = kMaxEffects;
+    bool open_world = true;  ///< screen the generated term library and the sensor stage (issue 10)
+};
+
+/// One explanation of a signature in the torque residual, re-simulated: a library effect, or terms.
+/// Hypotheses that leave the same torque residual (a sensor offset and a real torque) are told
+/// apart by the re-simulated trajectory (current, speed, angle, load: trajectory.hpp).
+struct Hypothesis {
+    std::string key, text;           ///< physics_names.hpp key ("current_sensor_offset") and text
+    std::string change;              ///< what the model gains ("current: 0.1", "hinge_offset = -80")
+    double cost = 0;                 ///< trajectory cost after its fit (1 = at the noise floor)
+    TrajectoryError error;
+    int simulations = 0;
 };
 
 /// One round: the screening, and the effect it added (if any) with the error after it.
 struct DiscoveryStep {
     ScreenResult screen;
-    std::optional<EffectShape> added;
+    GenericScreen generic;           ///< the generated library's screening (open world)
+    std::optional<EffectShape> added;  ///< a library effect was added
+    std::vector<sim::Term> added_terms;  ///< generated terms were added (fitted coefficients)
+    std::string name_key, name_text;   ///< what the added effect is (after the hypotheses)
+    std::vector<Hypothesis> hypotheses;  ///< best trajectory first, when alternatives exist
+    bool equivalent = false;           ///< the best two hypotheses are not told apart by the trajectory
+    double trajectory_before = 0, trajectory_after = 0;
     std::vector<FittedValue> fitted;  ///< values and standard errors of the re-simulation fit
     std::string rejected_by_fit;      ///< why the winner was not added after its fit (empty if added)
     double fit_delta_bic = 0;         ///< the criterion on the re-simulated cost, without vs with the effect
@@ -41,20 +61,42 @@ struct DiscoveryStep {
     ErrorMetrics error_after;
 };
 
+/// A term added by the sensor stage (theta offset or drift: invisible in the torque residual).
+struct SensorFinding {
+    std::string key, text;
+    sim::Term term;
+    double cost_before = 0, cost_after = 0;
+};
+
 struct DiscoveryReport {
     std::string load_case, sequence;
     std::size_t samples = 0;
+    NoiseFloor floor;                            ///< the run's own noise floor (trajectory.hpp)
+    std::vector<SensorFinding> sensor_findings;
+    std::vector<StructureReport> structure;      ///< the residual of the final model, per channel
+    TrajectoryError trajectory_before, trajectory_after;
     std::vector<HealthValue> baseline_health;  ///< step 1: estimated or datasheet
     AugmentedModel model;                      ///< health refit with the added effects
     std::vector<DiscoveryStep> steps;
     std::vector<std::string> notes;
 
-    /// Names of the added effects, in order ("viscous", ...).
+    /// Names of the added effects, in order: library names ("viscous", ...) or physics_names.hpp
+    /// keys of generated terms and of the hypotheses chosen ("friction_deflection", ...).
     [[nodiscard]] std::vector<std::string> added_effects() const;
+    /// The structure report of the most significant channel when the final model leaves the residual
+    /// significantly above the noise floor; nullptr when it is consistent with noise.
+    [[nodiscard]] const StructureReport* unexplained() const;
+    /// One line: the effects found, the unexplained structure, or "no significant discrepancy".
+    [[nodiscard]] std::string summary() const;
     /// The model's value of a term by sim::Effects name ("viscous"); nullopt when not in the model.
     [[nodiscard]] std::optional<double> term_value(const std::string& sim_name) const;
     [[nodiscard]] nlohmann::json to_json() const;
 };
+
+/// d T_R,model / d parameter ("fdj_nm", "eta_o") per sample, by a forward difference of two
+/// re-simulations of `p` (`model` is the re-simulation of `p`).
+[[nodiscard]] std::vector<double> sensitivity(const Run& run, const sim::EmaParams& p, const RunSignals& model,
+                                              const std::string& name);
 
 /// Throws EmadiagError on a run that cannot be analysed (NaN, too few samples or screening
 /// samples, unknown case/sequence), naming the field, the value and the limit.

@@ -22,7 +22,7 @@ struct ParamSpec {
 };
 constexpr ParamSpec kSpecs[] = {
     {"fdj_nm", 0.0, 10.0, 2e-4},
-    {"eta_o", 0.3, 1.0, 2e-3},
+    {"eta_o", 0.3, 0.9999, 2e-3},  // below 1: eq. (4) gives eta_A = 1 at eta_O = 1, outside the simulator range
     {"viscous", 0.0, 1.0, 1e-7},
     {"stribeck_amplitude", 0.0, 10.0, 2e-3},
     {"stribeck_speed", 1.0, 1e4, 1.0},
@@ -37,7 +37,21 @@ constexpr ParamSpec kSpecs[] = {
 /// Relative finite-difference step (the simulator's chatter makes smaller steps noisy).
 constexpr double kStepRel = 0.005;
 
+/// Coefficients of sim::Term entries are named "term:K" (K the index in EmaParams::terms): any
+/// value; the step is relative (kStepRel) with this floor.
+constexpr ParamSpec kTermSpec = {"term", -1e12, 1e12, 1e-12};
+
+std::size_t term_index(const std::string& name, const sim::EmaParams& p) {
+    const std::size_t k = std::stoul(name.substr(5));
+    if (k >= p.terms.size()) {
+        throw EmadiagError("discovery: parameter '" + name + "': the model has " + std::to_string(p.terms.size()) +
+                           " terms");
+    }
+    return k;
+}
+
 const ParamSpec& spec(const std::string& name) {
+    if (is_term_parameter(name)) return kTermSpec;
     for (const auto& s : kSpecs) {
         if (name == s.name) return s;
     }
@@ -48,7 +62,15 @@ double rms(double sum_sq, std::size_t n) { return n ? std::sqrt(sum_sq / static_
 
 }  // namespace
 
+bool is_term_parameter(const std::string& name) {
+    return name.size() > 5 && name.compare(0, 5, "term:") == 0 &&
+           name.find_first_not_of("0123456789", 5) == std::string::npos;
+}
+
+std::string term_parameter(std::size_t index) { return "term:" + std::to_string(index); }
+
 double get_parameter(const sim::EmaParams& p, const std::string& name) {
+    if (is_term_parameter(name)) return p.terms[term_index(name, p)].coefficient;
     if (name == "fdj_nm") return p.fdj_nm;
     if (name == "eta_o") return p.eta_o;
     (void)spec(name);
@@ -58,7 +80,9 @@ double get_parameter(const sim::EmaParams& p, const std::string& name) {
 void set_parameter(sim::EmaParams& p, const std::string& name, double value) {
     const ParamSpec& s = spec(name);
     value = std::clamp(value, s.lo, s.hi);
-    if (name == "fdj_nm") {
+    if (is_term_parameter(name)) {
+        p.terms[term_index(name, p)].coefficient = value;
+    } else if (name == "fdj_nm") {
         p.fdj_nm = value;
         p.fsj_nm = std::max(p.fsj_nm, p.fdj_nm);
     } else if (name == "eta_o") {
@@ -151,7 +175,8 @@ ErrorMetrics model_error(const RunSignals& a, const RunSignals& b, const std::ve
 
 FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
                               const std::vector<std::string>& names, const std::vector<char>& mask,
-                              double fsj_base_nm, std::size_t window_samples, const sim::EmaParams* reference) {
+                              double fsj_base_nm, std::size_t window_samples, const sim::EmaParams* reference,
+                              int max_iterations) {
     FitResult fr;
     // Rows: sums of the torque residual over windows of up to kFitWindowSamples consecutive masked
     // samples (the derivative noise of eq. 7 telescopes in a window sum).
@@ -187,7 +212,7 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
     double cost = fr.cost_start;
     double lambda = kFitStartDamping;
     Eigen::MatrixXd jac(m, np);
-    for (int it = 0; it < kMaxFitIterations; ++it) {
+    for (int it = 0; it < max_iterations; ++it) {
         fr.iterations = it + 1;
         // Forward differences of the model's T_R (e = y - f, so df = -(e_step - e)).
         for (Eigen::Index j = 0; j < np; ++j) {
@@ -222,7 +247,7 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
                 cost = cq;
                 lambda = std::max(lambda / 10.0, 1e-9);
                 improved = true;
-                if (gain < kFitRelativeTolerance) it = kMaxFitIterations;  // converged
+                if (gain < kFitRelativeTolerance) it = max_iterations;  // converged
             } else {
                 lambda *= 10.0;
             }

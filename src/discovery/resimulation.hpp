@@ -80,8 +80,12 @@ struct FitResult {
 [[nodiscard]] FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
                                             const std::vector<std::string>& names, const std::vector<char>& mask,
                                             double fsj_base_nm, std::size_t window_samples = kFitWindowSamples,
-                                            const sim::EmaParams* reference = nullptr);
+                                            const sim::EmaParams* reference = nullptr,
+                                            int max_iterations = kMaxFitIterations);
 
+/// Term coefficients are fitted by the name "term:K", K the index in EmaParams::terms.
+[[nodiscard]] bool is_term_parameter(const std::string& name);
+[[nodiscard]] std::string term_parameter(std::size_t index);
 /// Reads / writes one fittable parameter of EmaParams by name (eta_o also sets eta_a by eq. 4).
 [[nodiscard]] double get_parameter(const sim::EmaParams& p, const std::string& name);
 void set_parameter(sim::EmaParams& p, const std::string& name, double value);

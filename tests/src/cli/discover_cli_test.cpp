@@ -97,4 +97,31 @@ TEST_F(DiscoverCli, BadInputsAreClearErrors) {
     EXPECT_THAT(nan.output, HasSubstr("current_A"));
 }
 
+TEST_F(DiscoverCli, ManyRunsPlotAndTermsInjectedBySimulate) {
+    // A constant torque injected as a term, plus the viscous and clean runs: each run's report, then
+    // the comparison across the runs; the plot is an SVG.
+    ASSERT_EQ(run("simulate --case B --sequence dyn --noise typical --seed 5 --term 'torque: 0.035' --out " +
+                  path("const.csv")).exit_code, 0);
+    const Result r = run("discover " + path("const.csv") + " " + path("visc.csv") + " " + path("clean.csv") +
+                         " --plot " + path("p.svg"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_THAT(r.output, HasSubstr("hypotheses with the same torque residual"));
+    EXPECT_THAT(r.output, HasSubstr("added constant_torque"));
+    EXPECT_THAT(r.output, HasSubstr("no significant discrepancy"));
+    EXPECT_THAT(r.output, HasSubstr("=== across 3 runs ==="));
+    EXPECT_THAT(read("p.svg"), HasSubstr("<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox="));
+    const Result j = run("discover " + path("const.csv") + " " + path("clean.csv") + " --json");
+    ASSERT_EQ(j.exit_code, 0) << j.output;
+    EXPECT_EQ(nlohmann::json::parse(j.output)["schema"], "emadiag-discover-runs");
+}
+
+TEST_F(DiscoverCli, TailNeedsADatabaseAndBadTermsAreClearErrors) {
+    const Result r = run("discover --tail N123EM");
+    EXPECT_NE(r.exit_code, 0);
+    EXPECT_THAT(r.output, HasSubstr("--tail needs --db FILE"));
+    const Result t = run("simulate --term 'torque: 0.1*sgn(q)' --out " + path("x.csv"));
+    EXPECT_NE(t.exit_code, 0);
+    EXPECT_THAT(t.output, HasSubstr("expected a signal"));
+}
+
 }  // namespace

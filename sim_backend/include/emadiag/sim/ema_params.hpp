@@ -1,6 +1,8 @@
 #pragma once
 // Parameters of the reference actuator EMA-REF-1 (ema-reference.md section 1) and the
 // effects beyond the datasheet (issue 2 part 5). Every field is validated; JSON in and out.
+#include "emadiag/sim/terms.hpp"
+
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -50,6 +52,8 @@ struct EmaParams {
     double eta_a = 0.823788;  ///< overwritten from eta_o by eq. (4) unless set explicitly
     double dt_s = 1e-6;
     Effects effects;
+    /// Extra torque and sensor terms as data (terms.hpp); empty for the datasheet. JSON key "terms".
+    std::vector<Term> terms;
 
     /// Throws SimError listing every invalid field with its value and allowed range.
     void validate() const;

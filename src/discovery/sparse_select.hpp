@@ -1,0 +1,57 @@
+#pragma once
+// Sparse selection over the generated term library (issue 10 part 1; docs/discovery.md "Open
+// world"), on the same window sums of the torque residual as the library screening
+// (effect_screen.hpp). One block of terms is selected per round (greedy forward selection: the
+// block of largest likelihood gain, the others wait for the next round with it in the base; the
+// re-simulation fit then refits all coefficients together and drops a term that falls below the
+// effect-size floor: sequential thresholding as in STLSQ). The best block must pass all of:
+//   - delta_BIC = n ln(RSS_0/RSS_1) - (k + m) ln n - 2 ln G > 0, G the number of shapes in the whole
+//     generated library (Bonferroni for taking the best of G);
+//   - block-time cross-validation: kCvFolds contiguous folds of windows; the prediction error on the
+//     held-out folds falls with the block (cv_gain > 0);
+//   - stability under subsampling: in at least kMinStability of kStabilityResamples moving-block
+//     bootstrap resamples of the windows, the family still passes the BIC (with the Bonferroni
+//     allowance) and no other family beats it by more than kStabilityTie;
+//   - peak torque |sum b_j x_j| >= kMinEffectPeakNm on the compared samples.
+#include "discovery/effect_screen.hpp"
+#include "discovery/term_library.hpp"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace emadiag::discovery {
+
+inline constexpr int kCvFolds = 5;
+inline constexpr int kStabilityResamples = 24;
+inline constexpr std::size_t kStabilityBlockWindows = 8;
+inline constexpr double kMinStability = 0.6;
+/// Penalised log-likelihood units by which another family may beat the best in a resample.
+inline constexpr double kStabilityTie = 2.0;
+
+struct GenericEvidence {
+    std::string family;
+    std::vector<sim::Term> terms;      ///< the best shape, coefficients from the screening least squares
+    std::vector<double> se;            ///< their standard errors
+    double delta_bic = 0;
+    double explained_rms_nm = 0;       ///< sqrt((RSS_0 - RSS_1) / sum n_i^2)
+    double rss_ratio = 1;
+    double peak_torque_nm = 0;
+    double cv_gain = 0;                ///< 1 - CV error with / CV error without (checked for the best only)
+    double stability = 0;              ///< fraction of resamples this family wins (best only)
+    bool checked = false;              ///< CV and stability computed
+    bool accepted = false;
+    std::string reason;
+};
+
+struct GenericScreen {
+    std::size_t shapes = 0;            ///< G
+    std::vector<GenericEvidence> ranking;  ///< best delta_BIC first (one per family)
+};
+
+/// Screens every family of `lib` against the residual and base columns of `in`; the best one gets
+/// the cross-validation and stability checks. Deterministic (the resampling is seeded).
+[[nodiscard]] GenericScreen screen_generated(const RunSignals& s, const ScreenInput& in,
+                                             const std::vector<TermFamily>& lib, std::uint64_t seed = 1);
+
+}  // namespace emadiag::discovery

@@ -1,0 +1,127 @@
+// Terms as data (terms.hpp, issue 10 part 2): parsed, written as JSON and read back, evaluated by
+// the simulator on the scalar path, and run there by simulate_batch.
+#include "emadiag/sim/sim_error.hpp"
+#include "emadiag/sim/simulator.hpp"
+#include "emadiag/sim/terms.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace emadiag::sim {
+namespace {
+
+SimConfig case_b_dyn() {
+    SimConfig c;
+    c.load_case = LoadCase::B;
+    c.sequence = Sequence::Dyn;
+    return c;
+}
+
+double max_speed_difference(const SimResult& a, const SimResult& b) {
+    double d = 0;
+    for (std::size_t k = 0; k < a.samples.size(); ++k) {
+        d = std::max(d, std::abs(a.samples[k].speed_rad_s - b.samples[k].speed_rad_s));
+    }
+    return d;
+}
+
+TEST(Terms, ParseAndText) {
+    const Term t = parse_term("torque: 0.02*sgn(w)*abs(theta_u)");
+    EXPECT_EQ(t.target, TermTarget::Torque);
+    EXPECT_DOUBLE_EQ(t.coefficient, 0.02);
+    ASSERT_EQ(t.factors.size(), 2u);
+    EXPECT_EQ(t.factors[0].basis, TermBasis::Sgn);
+    EXPECT_EQ(t.factors[1].signal, TermSignal::ThetaSurface);
+    EXPECT_EQ(t.text(), "torque: 0.02*sgn(w)*abs(theta_u)");
+    const Term g = parse_term("current: -0.05");
+    EXPECT_EQ(g.target, TermTarget::Current);
+    EXPECT_TRUE(g.factors.empty());
+    const Term p = parse_term("0.01*gauss(theta_u, -4, 1.5)*sin(theta_m, 0.7)");
+    EXPECT_EQ(p.factors[0].basis, TermBasis::Gauss);
+    EXPECT_DOUBLE_EQ(p.factors[0].a, -4);
+    EXPECT_DOUBLE_EQ(p.factors[0].b, 1.5);
+    TermInputs x;
+    x.theta_u_deg = -4;
+    x.theta_m = 0.7 / 4;
+    EXPECT_NEAR(term_value(p, x), 0.01, 1e-12);
+}
+
+TEST(Terms, ParseErrorsNameWhatAndWhere) {
+    auto message = [](const std::string& s) {
+        try {
+            (void)parse_term(s);
+        } catch (const SimError& e) {
+            return std::string(e.what());
+        }
+        return std::string("no error");
+    };
+    EXPECT_NE(message("torque: 0.1*sgn(v)").find("expected a signal"), std::string::npos) << message("torque: 0.1*sgn(v)");
+    EXPECT_NE(message("force: 0.1").find("a target"), std::string::npos);
+    EXPECT_NE(message("0.1*sin(w, 0)").find("period must be > 0"), std::string::npos);
+    EXPECT_NE(message("0.1*foo(w)").find("a function"), std::string::npos);
+    EXPECT_NE(message("0.1 w").find("'*'"), std::string::npos);
+}
+
+TEST(Terms, JsonRoundTripThroughParams) {
+    EmaParams p = EmaParams::datasheet();
+    p.terms.push_back(parse_term("torque: 0.03*sgn(w)*abs(F_R)"));
+    p.terms.push_back(parse_term("theta: 0.02*t"));
+    p.terms[0].std_error = 0.001;
+    const EmaParams q = EmaParams::from_json(p.to_json());
+    ASSERT_EQ(q.terms.size(), 2u);
+    EXPECT_EQ(q.terms[0].text(), p.terms[0].text());
+    EXPECT_DOUBLE_EQ(q.terms[0].std_error, 0.001);
+    EXPECT_EQ(q.terms[1].target, TermTarget::Theta);
+    // The datasheet writes no "terms" key; a bad term is an error naming where it is.
+    EXPECT_FALSE(EmaParams::datasheet().to_json().contains("terms"));
+    nlohmann::json bad = EmaParams::datasheet().to_json();
+    bad["terms"] = {{{"basis", "sgn(q)"}, {"coefficient", 1.0}}};
+    try {
+        (void)EmaParams::from_json(bad);
+        FAIL() << "no error";
+    } catch (const SimError& e) {
+        EXPECT_NE(std::string(e.what()).find("params.terms[0]"), std::string::npos) << e.what();
+    }
+}
+
+TEST(Terms, TorqueTermActsLikeTheEffectItWrites) {
+    // viscous friction as an effect and as the term 5e-5 * w: the same motion.
+    SimConfig a = case_b_dyn();
+    a.params.effects.set("viscous", 5e-5);
+    SimConfig b = case_b_dyn();
+    b.params.terms.push_back(parse_term("torque: 5e-5*w"));
+    const SimResult ra = simulate(a), rb = simulate(b), r0 = simulate(case_b_dyn());
+    EXPECT_LT(max_speed_difference(ra, rb), 0.05);
+    EXPECT_GT(max_speed_difference(ra, r0), 1.0);  // and the term did change the run
+}
+
+TEST(Terms, SensorTermsChangeOnlyTheReportedSignal) {
+    SimConfig a = case_b_dyn();
+    a.params.terms.push_back(parse_term("current: 0.05"));
+    a.params.terms.push_back(parse_term("theta: 0.02*t"));
+    const SimResult r = simulate(a), r0 = simulate(case_b_dyn());
+    for (std::size_t k = 0; k < r.samples.size(); ++k) {
+        EXPECT_NEAR(r.samples[k].current_a - r0.samples[k].current_a, 0.05, 1e-12);
+        EXPECT_NEAR(r.samples[k].theta_m_rad - r0.samples[k].theta_m_rad, 0.02 * r0.samples[k].t_s, 1e-12);
+        EXPECT_EQ(r.samples[k].speed_rad_s, r0.samples[k].speed_rad_s);
+    }
+}
+
+TEST(Terms, BatchRunsTermsOnTheScalarPath) {
+    std::vector<SimConfig> cs(3, case_b_dyn());
+    for (std::size_t i = 0; i < cs.size(); ++i) {
+        cs[i].params.terms.push_back(parse_term("torque: 0.04*sgn(w)*abs(theta_u)"));
+        cs[i].params.fdj_nm = 0.06 + 0.01 * static_cast<double>(i);
+    }
+    const auto rs = simulate_batch(cs, 1);
+    for (std::size_t i = 0; i < cs.size(); ++i) {
+        const SimResult one = simulate(cs[i]);
+        EXPECT_EQ(max_speed_difference(rs[i], one), 0.0);
+    }
+    std::vector<SimConfig> mixed = {cs[0], case_b_dyn()};
+    EXPECT_THROW((void)simulate_batch(mixed, 1), SimError);
+}
+
+}  // namespace
+}  // namespace emadiag::sim
