@@ -1,6 +1,7 @@
 #include "emadiag/db/database.hpp"
 
 #include "emadiag/db/db_error.hpp"
+#include "emadiag/io/output_path.hpp"
 #include "schema_sql.hpp"
 
 #include <sqlite3.h>
@@ -8,6 +9,9 @@
 namespace emadiag::db {
 
 Database::Database(const std::string& path, int busy_timeout_ms) : path_(path) {
+    if (path != ":memory:") {
+        if (const auto problem = io::output_path_problem(path, "maintenance database")) throw DbError(*problem);
+    }
     const int rc = sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr);
     if (rc != SQLITE_OK) {
         const std::string msg = db_ != nullptr ? sqlite3_errmsg(db_) : sqlite3_errstr(rc);
@@ -17,6 +21,7 @@ Database::Database(const std::string& path, int busy_timeout_ms) : path_(path) {
     }
     sqlite3_busy_timeout(db_, busy_timeout_ms);
     try {
+        check_writable_and_intact();
         exec("PRAGMA foreign_keys = ON");
         migrate();
     } catch (...) {
@@ -38,6 +43,33 @@ void Database::exec(std::string_view sql) {
         const std::string msg = err != nullptr ? err : "unknown error";
         sqlite3_free(err);
         throw DbError("SQL failed on " + path_ + ": " + msg + " in: " + text.substr(0, 120));
+    }
+}
+
+void Database::check_writable_and_intact() {
+    // SQLite opens a file it may not write read-only without an error; every write would then fail
+    // half-way through a command. Refuse it here, before anything is done.
+    if (sqlite3_db_readonly(db_, "main") == 1) {
+        throw DbError("database " + path_ + " is read-only (no write permission on the file or its medium); " +
+                      "emadiag needs to write to it: copy it to a writable place or fix the permissions");
+    }
+    // A corrupt or truncated file is detected before any write (migrations included) touches it.
+    // quick_check reads every page (O(size), about 0.1 s per 100 MB); its first problems are named.
+    std::string problems;
+    int n = 0;
+    try {
+        Statement st(*this, "PRAGMA quick_check(5)");
+        while (st.step()) {
+            const std::string line = st.column_text(0);
+            if (line == "ok") continue;
+            problems += (n++ > 0 ? "; " : "") + line;
+        }
+    } catch (const DbError& e) {
+        problems = e.what();  // e.g. "file is not a database", "database disk image is malformed"
+    }
+    if (!problems.empty()) {
+        throw DbError("database " + path_ + " is corrupt or truncated and was not opened (nothing was written to it): " +
+                      problems + "; restore it from a backup");
     }
 }
 

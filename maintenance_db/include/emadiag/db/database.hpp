@@ -60,6 +60,9 @@ public:
     [[nodiscard]] std::string error_text() const;
 
 private:
+    /// Throws DbError, before anything is written, for a read-only file and for a corrupt or
+    /// truncated one (PRAGMA quick_check).
+    void check_writable_and_intact();
     void migrate();
     sqlite3* db_ = nullptr;
     std::string path_;
