@@ -8,6 +8,7 @@ PACKAGES=(
   libeigen3-dev libsqlite3-dev sqlite3 libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev
   user-mode-linux kmod iproute2 can-utils
+  clang libclang-rt-14-dev  # libFuzzer targets (fuzz/, scripts/fuzz/run_fuzz.sh)
 )
 
 missing=()

@@ -114,7 +114,7 @@ inline double& lane(D& v, int l) {
         (void)l;
         return v;
     } else {
-        return v[l];
+        return reinterpret_cast<double*>(&v)[l];  // clang binds no reference to v[l] (fuzz build)
     }
 }
 /// |a| by clearing the sign bit (one AND; -0 becomes +0, which no caller can tell apart).

@@ -8,6 +8,7 @@
 #include "core/run_csv.hpp"
 #include "discovery/candidate_effect.hpp"
 #include "discovery/discovery.hpp"
+#include "emadiag/io/output_path.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -96,6 +97,7 @@ void print_text(std::ostream& os, const std::string& path, const discovery::Disc
 }
 
 void write_json_file(const std::string& path, const nlohmann::json& j) {
+    if (const auto problem = io::output_path_problem(path, "JSON output")) throw EmadiagError(*problem);
     std::ofstream out(path);
     if (!out) throw EmadiagError("cannot write " + path);
     out << j.dump(2) << '\n';
