@@ -65,8 +65,11 @@ std::optional<CandumpRecord> parse_candump_line(std::string_view line, std::stri
     ++i;
     long long sec = 0, usec = 0;
     std::size_t digits = 0;
+    // Seconds since 1970 up to 9e9 (the year 2255): sec * 1e9 + ns must fit the int64 nanoseconds.
+    constexpr long long kMaxSeconds = 9'000'000'000LL;
     while (i < line.size() && std::isdigit(static_cast<unsigned char>(line[i]))) {
         sec = sec * 10 + (line[i++] - '0');
+        if (sec > kMaxSeconds) return fail(i - 1, "timestamp seconds beyond 9000000000 (the year 2255)");
         ++digits;
     }
     if (digits == 0 || i >= line.size() || line[i] != '.') return fail(i, "expected the timestamp as sec.usec");

@@ -191,3 +191,26 @@ TEST(DatasetLimits, AHeaderThatLiesAboutItsSizeIsRefusedBeforeAllocating) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(CandumpFindings, TimestampSecondsBeyondInt64NanosecondsAreACleanError) {
+    // Found by fuzz_candump: sec * 10 overflowed (UBSan), and sec * 1e9 beyond 9.2e9 s as well.
+    std::string error;
+    EXPECT_FALSE(can::parse_candump_line("(4446666666666666666666.000000) vcan0 100#00", error));
+    EXPECT_THAT(error, HasSubstr("timestamp seconds beyond 9000000000"));
+    EXPECT_TRUE(can::parse_candump_line("(8999999999.999999) vcan0 100#00", error)) << error;
+}
+
+TEST(JsonFindings, NumberOverflowIsAParseErrorOfEveryLoader) {
+    // Found by fuzz_limits_json and fuzz_dataset: nlohmann's out_of_range 406 escaped the loaders.
+    std::string error;
+    EXPECT_FALSE(io::parse_bounded_json("{\"FDJ_Nm\": {\"max\": 1e999}}", error));
+    EXPECT_THAT(error, HasSubstr("number overflow"));
+    const std::string path = temp_file("overflow.json", "{\"j_kgm2\": 0.0001651e406}");
+    EXPECT_THAT([&] { (void)sim::EmaParams::from_json_file(path); }, ThrowsMessage<sim::SimError>(HasSubstr("number overflow")));
+    EXPECT_THAT([&] { (void)HealthLimits::load(path); }, ThrowsMessage<EmadiagError>(HasSubstr("number overflow")));
+    fs::remove(path);
+}
+
+}  // namespace
