@@ -2,7 +2,7 @@
 # Storage faults with the real command (issue 12 part 3; table in tests/README.md "Storage faults"):
 #   1. `emadiag history-sim` killed with SIGKILL at a random point, N times (default 50), on one
 #      database; after each kill PRAGMA integrity_check is ok and every session is whole;
-#   2. a full disk: history-sim into a database on a 256 kB tmpfs (needs mount, i.e. root); it must
+#   2. a full disk: history-sim into a database on a 2 MB tmpfs (needs mount, i.e. root); it must
 #      stop with "database or disk is full", leaving the sessions stored before it whole.
 # The unit test maintenance_db_storage_fault_test covers the same with the library (fork + SIGKILL),
 # two writers at once, an I/O error at every write and a full disk through a VFS shim, a corrupt,
@@ -56,10 +56,10 @@ for i in $(seq 1 "$kills"); do
 done
 echo "kill -9: $kills kills, $hot interrupted a transaction (hot journal), $before whole sessions, integrity ok, no partial session"
 
-echo "== full disk: history-sim on a 256 kB tmpfs =="
+echo "== full disk: history-sim on a 2 MB tmpfs =="
 mnt=$work/mnt
 mkdir -p "$mnt"
-if mount -t tmpfs -o size=256k tmpfs "$mnt" 2>/dev/null; then
+if mount -t tmpfs -o size=2m tmpfs "$mnt" 2>/dev/null; then
   set +e
   out=$("$emadiag" history-sim --db "$mnt/full.db" --tail N123EM --sessions 50 --noise none 2>&1)
   rc=$?
