@@ -10,6 +10,7 @@ PACKAGES=(
   libhwy-dev
   user-mode-linux kmod iproute2 can-utils
   chromium fonts-dejavu-core python3
+  clang libclang-rt-14-dev  # libFuzzer targets (fuzz/, scripts/fuzz/run_fuzz.sh)
 )
 
 missing=()

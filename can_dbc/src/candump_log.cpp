@@ -1,9 +1,11 @@
 #include "emadiag/can/candump_log.hpp"
 
 #include "emadiag/can/can_error.hpp"
+#include "emadiag/io/output_path.hpp"
 
 #include <cctype>
 #include <cstdio>
+#include <istream>
 
 namespace emadiag::can {
 namespace {
@@ -63,8 +65,11 @@ std::optional<CandumpRecord> parse_candump_line(std::string_view line, std::stri
     ++i;
     long long sec = 0, usec = 0;
     std::size_t digits = 0;
+    // Seconds since 1970 up to 9e9 (the year 2255): sec * 1e9 + ns must fit the int64 nanoseconds.
+    constexpr long long kMaxSeconds = 9'000'000'000LL;
     while (i < line.size() && std::isdigit(static_cast<unsigned char>(line[i]))) {
         sec = sec * 10 + (line[i++] - '0');
+        if (sec > kMaxSeconds) return fail(i - 1, "timestamp seconds beyond 9000000000 (the year 2255)");
         ++digits;
     }
     if (digits == 0 || i >= line.size() || line[i] != '.') return fail(i, "expected the timestamp as sec.usec");
@@ -146,34 +151,87 @@ std::optional<CandumpRecord> parse_candump_line(std::string_view line, std::stri
     return r;
 }
 
-std::vector<CandumpRecord> read_candump_file(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw CanError(path + ": cannot open the candump log");
-    std::vector<CandumpRecord> out;
+static bool read_bounded_line(std::istream& in, std::string& line, std::size_t max_bytes, bool& too_long) {
+    line.clear();
+    too_long = false;
+    std::streambuf* sb = in.rdbuf();
+    bool any = false;
+    for (;;) {
+        const int c = sb->sbumpc();
+        if (c == std::char_traits<char>::eof()) {
+            in.setstate(std::ios::eofbit);
+            return any;
+        }
+        any = true;
+        if (c == '\n') return true;
+        if (line.size() < max_bytes) line.push_back(static_cast<char>(c));
+        else too_long = true;  // the rest of the line is skipped, never stored
+    }
+}
+
+void for_each_candump_record(std::istream& in, const std::string& name, const std::function<void(CandumpRecord&&)>& on_record) {
     std::vector<std::string> errors;
+    std::size_t bad_lines = 0;
     std::string line;
     std::size_t lineno = 0;
-    while (std::getline(in, line)) {
+    bool too_long = false;
+    auto bad = [&](std::string text) {
+        if (++bad_lines <= kCandumpMaxReportedErrors) errors.push_back(name + ":" + std::to_string(lineno) + ":" + text);
+    };
+    while (read_bounded_line(in, line, kCandumpMaxLineBytes, too_long)) {
         ++lineno;
+        if (too_long) {
+            bad("1: line longer than the limit kCandumpMaxLineBytes = " + std::to_string(kCandumpMaxLineBytes) + " bytes");
+            continue;
+        }
         if (!line.empty() && line.back() == '\r') line.pop_back();
         bool blank = true;
         for (char c : line) blank = blank && std::isspace(static_cast<unsigned char>(c));
         if (blank) continue;
         std::string err;
         auto r = parse_candump_line(line, err);
-        if (r) out.push_back(std::move(*r));
-        else errors.push_back(path + ":" + std::to_string(lineno) + ":" + err);
+        if (r) on_record(std::move(*r));
+        else bad(err);
     }
-    if (!errors.empty()) {
-        std::string all = std::to_string(errors.size()) + " bad line" + (errors.size() == 1 ? "" : "s") + " in candump log " + path + ":";
+    if (in.bad()) throw CanError(name + ": read error after line " + std::to_string(lineno));
+    if (bad_lines > 0) {
+        std::string all = std::to_string(bad_lines) + " bad line" + (bad_lines == 1 ? "" : "s") + " in candump log " + name +
+                          (bad_lines > errors.size() ? " (the first " + std::to_string(errors.size()) + " listed)" : "") + ":";
         for (const auto& e : errors) all += "\n" + e;
         throw CanError(all);
     }
+}
+
+std::vector<CandumpRecord> read_candump(std::istream& in, const std::string& name) {
+    std::vector<CandumpRecord> out;
+    for_each_candump_record(in, name, [&](CandumpRecord&& r) {
+        if (out.size() >= kCandumpMaxRecords) {
+            throw CanError(name + ": more than the limit kCandumpMaxRecords = " + std::to_string(kCandumpMaxRecords) +
+                           " frames for a log held in memory (replay); split the log");
+        }
+        out.push_back(std::move(r));
+    });
     return out;
 }
 
+std::vector<CandumpRecord> read_candump_file(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw CanError(path + ": cannot open the candump log");
+    return read_candump(in, path);
+}
+
+namespace {
+const std::string& checked_output(const std::string& path) {
+    if (const auto problem = io::output_path_problem(path, "candump log")) throw CanError(*problem);
+    return path;
+}
+}  // namespace
+
 CandumpWriter::CandumpWriter(const std::string& path, CandumpWriterBounds bounds)
-    : path_(path), bounds_(bounds), out_(path, std::ios::trunc | std::ios::binary), last_flush_(std::chrono::steady_clock::now()) {
+    : path_(path),
+      bounds_(bounds),
+      out_(checked_output(path), std::ios::trunc | std::ios::binary),
+      last_flush_(std::chrono::steady_clock::now()) {
     if (!out_) throw CanError(path + ": cannot create the candump log");
     buffer_.reserve(bounds_.max_buffered_bytes + 128);
 }

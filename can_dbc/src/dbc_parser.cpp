@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
 #include <cerrno>
 #include <cstdlib>
 #include <set>
@@ -46,24 +47,46 @@ const std::set<std::string>& skipped_keywords() {
     return k;
 }
 
+/// Decimal digits only, no sign, no overflow.
+bool parse_decimal_u64(std::string_view digits, std::uint64_t& out) {
+    if (digits.empty()) return false;
+    const auto [ptr, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), out);
+    return ec == std::errc() && ptr == digits.data() + digits.size();
+}
+
+/// A limit of docs/limits.md was exceeded: parsing stops (the problems so far are reported).
+struct LimitExceeded {
+    int line;
+    int col;
+    std::string message;
+};
+
 class Parser {
 public:
     Parser(std::string_view text, std::string file) : text_(text), file_(std::move(file)) {}
 
     Database run() {
-        tokenize();
-        while (peek().kind != Tok::End) {
-            const std::size_t start = pos_;
-            try {
-                statement();
-            } catch (const SyntaxError& e) {
-                error(e.line, e.col, e.message);
-                recover(start);
+        try {
+            tokenize();
+            while (peek().kind != Tok::End) {
+                const std::size_t start = pos_;
+                try {
+                    statement();
+                } catch (const SyntaxError& e) {
+                    error(e.line, e.col, e.message);
+                    recover(start);
+                }
             }
+            finish();
+        } catch (const LimitExceeded& e) {
+            // Listed even when the problem list is full: the reader must learn which limit stopped it.
+            errors_.push_back(Problem{e.line, e.col, file_ + ":" + std::to_string(e.line) + ":" + std::to_string(e.col) + ": " +
+                                                         e.message + "; parsing stopped here"});
         }
-        finish();
-        if (!errors_.empty()) {
-            std::string all = std::to_string(errors_.size()) + (errors_.size() == 1 ? " problem" : " problems") + " in " + file_ + ":";
+        if (!errors_.empty() || dropped_errors_ > 0) {
+            const std::size_t n = errors_.size() + dropped_errors_;
+            std::string all = std::to_string(n) + (n == 1 ? " problem" : " problems") + " in " + file_ +
+                              (dropped_errors_ > 0 ? " (the first " + std::to_string(errors_.size()) + " listed)" : "") + ":";
             std::stable_sort(errors_.begin(), errors_.end(), [](const Problem& a, const Problem& b) {
                 return a.line != b.line ? a.line < b.line : a.col < b.col;
             });
@@ -189,6 +212,10 @@ private:
         throw SyntaxError{t.line, t.col, "expected " + what + ", found " + describe(t)};
     }
     void error(int line, int col, const std::string& message) {
+        if (errors_.size() >= kDbcMaxReportedProblems) {
+            ++dropped_errors_;
+            return;
+        }
         errors_.push_back(Problem{line, col, file_ + ":" + std::to_string(line) + ":" + std::to_string(col) + ": " + message});
     }
     void error(const Token& t, const std::string& message) { error(t.line, t.col, message); }
@@ -345,7 +372,9 @@ private:
         if (ok && db_.find_message(m.id, m.extended)) {
             error(id_tok, "message '" + name + "': id " + format_id(m.id, m.extended) + " is already used by message '" + db_.find_message(m.id, m.extended)->name + "'");
         }
-        (void)kw;
+        if (db_.messages.size() >= kDbcMaxMessages) {
+            throw LimitExceeded{kw.line, kw.col, "more than the limit kDbcMaxMessages = " + std::to_string(kDbcMaxMessages) + " messages"};
+        }
         db_.messages.push_back(std::move(m));
         current_ = &db_.messages.back();
         current_ok_ = ok;
@@ -364,7 +393,8 @@ private:
             } else if (m.size() >= 2 && m[0] == 'm' && std::isdigit(static_cast<unsigned char>(m[1]))) {
                 std::size_t j = 1;
                 while (j < m.size() && std::isdigit(static_cast<unsigned char>(m[j]))) ++j;
-                s.mux_value = std::stoull(m.substr(1, j - 1));
+                if (!parse_decimal_u64(std::string_view(m).substr(1, j - 1), s.mux_value))
+                    throw SyntaxError{mt.line, mt.col, "multiplexer value in '" + m + "' is out of range (at most 2^64 - 1)"};
                 const std::string rest = m.substr(j);
                 if (rest == "M") s.mux_role = MuxRole::MultiplexedMultiplexor;
                 else if (rest.empty()) s.mux_role = MuxRole::Multiplexed;
@@ -421,6 +451,13 @@ private:
         }
         s.start_bit = static_cast<std::uint32_t>(start);
         s.length = static_cast<std::uint32_t>(len);
+        if (current_->signals.size() >= kDbcMaxSignalsPerMessage) {
+            throw LimitExceeded{kw.line, kw.col, "message '" + current_->name + "' has more than the limit kDbcMaxSignalsPerMessage = " +
+                                                     std::to_string(kDbcMaxSignalsPerMessage) + " signals"};
+        }
+        if (++signal_count_ > kDbcMaxSignals) {
+            throw LimitExceeded{kw.line, kw.col, "more than the limit kDbcMaxSignals = " + std::to_string(kDbcMaxSignals) + " signals"};
+        }
         if (current_->find_signal(s.name)) {
             error(name_tok, "signal '" + s.name + "' is defined twice in message '" + current_->name + "'");
             return;
@@ -662,7 +699,9 @@ private:
             const std::uint64_t lo = unsigned_int("range start");
             const Token ht = peek();
             if (ht.kind != Tok::Number || ht.text[0] != '-') fail(ht, "'-' and the range end");
-            const std::uint64_t hi = std::stoull(ht.text.substr(1));
+            std::uint64_t hi = 0;
+            if (!parse_decimal_u64(std::string_view(ht.text).substr(1), hi))
+                throw SyntaxError{ht.line, ht.col, "invalid multiplexor range end '" + ht.text.substr(1) + "' (expected an unsigned integer)"};
             next();
             if (hi < lo) error(ht, "multiplexor range " + std::to_string(lo) + "-" + std::to_string(hi) + " is empty");
             ranges.push_back(MuxRange{lo, hi});
@@ -722,6 +761,8 @@ private:
         std::string text;
     };
     std::vector<Problem> errors_;
+    std::size_t dropped_errors_ = 0;
+    std::size_t signal_count_ = 0;
     Database db_;
     Message* current_ = nullptr;
     bool current_ok_ = true;
@@ -733,6 +774,10 @@ private:
 }  // namespace
 
 Database parse_dbc(std::string_view text, const std::string& file_name) {
+    if (text.size() > kDbcMaxBytes) {
+        throw CanError(file_name + ": " + std::to_string(text.size()) + " bytes exceed the limit kDbcMaxBytes = " +
+                       std::to_string(kDbcMaxBytes) + " for a DBC file");
+    }
     Database db = Parser(text, file_name).run();
     return db;
 }

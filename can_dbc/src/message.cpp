@@ -92,9 +92,16 @@ const Message& Database::message(std::string_view msg_name) const {
 Database parse_dbc_file(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw CanError(path + ": cannot open the DBC file");
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    return parse_dbc(ss.str(), path);
+    std::string text;
+    char buf[65536];
+    while (in.read(buf, sizeof buf) || in.gcount() > 0) {
+        text.append(buf, static_cast<std::size_t>(in.gcount()));
+        if (text.size() > kDbcMaxBytes) {
+            throw CanError(path + ": larger than the limit kDbcMaxBytes = " + std::to_string(kDbcMaxBytes) + " for a DBC file");
+        }
+    }
+    if (in.bad()) throw CanError(path + ": read error");
+    return parse_dbc(text, path);
 }
 
 }  // namespace emadiag::can

@@ -2,6 +2,8 @@
 
 #include "emadiag/db/db_error.hpp"
 #include "record_detail.hpp"
+
+#include "emadiag/io/output_path.hpp"
 #include "schema_sql.hpp"
 
 #include <sqlite3.h>
@@ -59,6 +61,7 @@ void throw_sqlite_error(Database& db, int rc, const std::string& what) {
 Database::Database(const std::string& path, int busy_timeout_ms, bool quick_check) : path_(path), busy_timeout_ms_(busy_timeout_ms) {
     const bool in_memory = path == ":memory:" || path.empty();
     if (!in_memory) {
+        if (const auto problem = io::output_path_problem(path, "maintenance database")) throw DbError(*problem);
         // The header first: a file that is not SQLite's is refused before SQLite touches it.
         std::ifstream in(path, std::ios::binary);
         if (in) {
@@ -66,8 +69,8 @@ Database::Database(const std::string& path, int busy_timeout_ms, bool quick_chec
             in.read(head.data(), static_cast<std::streamsize>(head.size()));
             const auto got = static_cast<std::size_t>(in.gcount());
             if (got > 0 && (got < kSqliteHeaderBytes || head != std::string(kSqliteHeader, kSqliteHeaderBytes))) {
-                throw DbError("database " + path + " is corrupt or not an SQLite database (its first " + std::to_string(got) +
-                                  " bytes are not the SQLite header); it is left untouched",
+                throw DbError("database " + path + " is corrupt or not an SQLite database: corrupt or truncated (its first " +
+                                  std::to_string(got) + " bytes are not the SQLite header); it was not opened and is left untouched",
                               DbErrorKind::Corrupt);
             }
         }
@@ -113,6 +116,13 @@ Statement& Database::cached(const std::string& sql) {
 std::string Database::error_text() const { return std::string(sqlite3_errmsg(db_)) + " (" + path_ + ")"; }
 
 void Database::check_before_write() {
+    // SQLite opens a file it may not write read-only without an error; every write would then fail
+    // half-way through a command. Refuse it here, before anything is done.
+    if (sqlite3_db_readonly(db_, "main") == 1) {
+        throw DbError("database " + path_ + " is read-only (no write permission on the file or its medium); " +
+                          "emadiag needs to write to it: copy it to a writable place or fix the permissions",
+                      DbErrorKind::ReadOnly);
+    }
     sqlite3_stmt* st = nullptr;
     int rc = sqlite3_prepare_v2(db_, "PRAGMA quick_check", -1, &st, nullptr);
     std::string problems;
@@ -129,13 +139,13 @@ void Database::check_before_write() {
     sqlite3_finalize(st);
     if (rc != SQLITE_DONE && rc != SQLITE_OK) {
         const DbErrorKind kind = kind_of(rc) == DbErrorKind::Other ? DbErrorKind::Corrupt : kind_of(rc);
-        throw DbError("database " + path_ + " cannot be checked before use (" + cause_of(kind, busy_timeout_ms_) + "): " + err +
-                          "; it is left untouched",
+        throw DbError("database " + path_ + " is corrupt or truncated and was not opened, or cannot be checked before use (" +
+                          cause_of(kind, busy_timeout_ms_) + "): " + err + "; it is left untouched",
                       kind);
     }
     if (lines > 0) {
-        throw DbError("database " + path_ + " is corrupt (PRAGMA quick_check: " + problems + (lines > 3 ? "; ..." : "") +
-                          "); it is left untouched: restore it from a backup",
+        throw DbError("database " + path_ + " is corrupt or truncated and was not opened (nothing was written to it; PRAGMA quick_check: " +
+                          problems + (lines > 3 ? "; ..." : "") + "); restore it from a backup",
                       DbErrorKind::Corrupt);
     }
 }

@@ -29,7 +29,20 @@ std::optional<std::string> tail_number_problem(const std::string& tail_number) {
         ok = ok && (std::isupper(static_cast<unsigned char>(c)) || std::isdigit(static_cast<unsigned char>(c)) || c == '-');
     }
     if (ok) return std::nullopt;
-    return "tail number '" + tail_number + "' is not valid: use 1 to " + std::to_string(kMaxTailNumberLength) +
+    // Quoted with control bytes escaped and at most 40 bytes long (a megabyte-long tail number gives
+    // a one-line error, not a megabyte; a NUL byte does not cut the message short).
+    std::string shown;
+    for (std::size_t i = 0; i < tail_number.size() && i < 40; ++i) {
+        const auto c = static_cast<unsigned char>(tail_number[i]);
+        if (c < 0x20 || c == 0x7F) {
+            static constexpr char kHex[] = "0123456789ABCDEF";
+            shown += std::string("\\x") + kHex[c >> 4] + kHex[c & 15];
+        } else {
+            shown += static_cast<char>(c);
+        }
+    }
+    if (tail_number.size() > 40) shown += "... (" + std::to_string(tail_number.size()) + " bytes)";
+    return "tail number '" + shown + "' is not valid: use 1 to " + std::to_string(kMaxTailNumberLength) +
            " characters of A-Z, 0-9 and '-'";
 }
 

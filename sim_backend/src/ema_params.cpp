@@ -1,5 +1,6 @@
 #include "emadiag/sim/ema_params.hpp"
 
+#include "emadiag/io/bounded_json.hpp"
 #include "emadiag/sim/sim_error.hpp"
 
 #include <cmath>
@@ -246,15 +247,10 @@ EmaParams EmaParams::from_json(const nlohmann::json& j, const std::string& where
 }
 
 EmaParams EmaParams::from_json_file(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw SimError("cannot open parameter file " + path);
-    nlohmann::json j;
-    try {
-        j = nlohmann::json::parse(in);
-    } catch (const nlohmann::json::parse_error& e) {
-        throw SimError(path + ": JSON parse error at byte " + std::to_string(e.byte) + ": " + e.what());
-    }
-    return from_json(j, path);
+    std::string error;
+    const auto j = io::read_bounded_json_file(path, error);
+    if (!j) throw SimError(error == "cannot open" ? "cannot open parameter file " + path : path + ": " + error);
+    return from_json(*j, path);
 }
 
 nlohmann::json EmaParams::to_json() const {

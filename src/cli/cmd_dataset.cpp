@@ -1,5 +1,7 @@
 // emadiag dataset: simulated runs with random health parameters for training the paper's network.
 #include "cli/command.hpp"
+#include "core/emadiag_error.hpp"
+#include "emadiag/io/output_path.hpp"
 #include "estimation/dataset.hpp"
 
 #include <unistd.h>
@@ -45,6 +47,8 @@ const bool registered = register_command(Command{
         sub.add_option("--out", o->out, "Output dataset file (docs/dataset-format.md)")->required();
         sub.add_option("--threads", o->threads, "Simulation threads (default: all cores)");
         return [o] {
+            // Checked before the simulations (minutes), not only when the file is written.
+            if (const auto problem = io::output_path_problem(o->out, "dataset")) throw EmadiagError(*problem);
             DatasetSpec spec;
             spec.load_case = sim::parse_load_case(o->load_case);
             spec.sequence = sim::parse_sequence(o->sequence);

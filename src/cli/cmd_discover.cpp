@@ -16,6 +16,7 @@
 #include "emadiag/db/run_store.hpp"
 #include "emadiag/db/record_store.hpp"
 #include "emadiag/sim/simulator.hpp"
+#include "emadiag/io/output_path.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -193,6 +194,7 @@ void write_text_file(const std::string& path, const std::string& text) {
 }
 
 void write_json_file(const std::string& path, const nlohmann::json& j) {
+    if (const auto problem = io::output_path_problem(path, "JSON output")) throw EmadiagError(*problem);
     std::ofstream out(path);
     if (!out) throw EmadiagError("cannot write " + path);
     out << j.dump(2) << '\n';

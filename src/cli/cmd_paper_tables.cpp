@@ -1,6 +1,7 @@
 // emadiag paper-tables: the seed paper's Tables 2 to 8 regenerated on fresh data, paper beside ours.
 #include "cli/command.hpp"
 #include "core/emadiag_error.hpp"
+#include "emadiag/io/output_path.hpp"
 #include "estimation/paper_tables.hpp"
 
 #include <algorithm>
@@ -28,6 +29,8 @@ const bool registered = register_command(Command{
         sub.add_option("--seed", o->seed, "Seed of every dataset, split and initialisation")->default_val(2026);
         sub.add_flag("--no-physics", o->no_physics, "Skip the physics estimator");
         return [o] {
+            // Checked before the tables are computed (minutes), not when they are written.
+            if (const auto problem = io::output_path_problem(o->out, "paper tables")) throw EmadiagError(*problem);
             PaperTablesOptions p;
             p.quick = o->quick;
             p.seed = o->seed;

@@ -1,6 +1,7 @@
 // emadiag train: trains the paper's network (section 2.8) with SCG on a dataset and writes the model JSON.
 #include "cli/command.hpp"
 #include "core/emadiag_error.hpp"
+#include "emadiag/io/output_path.hpp"
 #include "estimation/health_estimate.hpp"
 #include "estimation/nn_trainer.hpp"
 
@@ -65,6 +66,8 @@ const bool registered = register_command(Command{
             ->check(CLI::IsMember({"linear", "mean"}));
         sub.add_option("--goal", o->goal, "Training MSE goal, normalised [0, 1] space (the paper: 1e-6)")->default_val(1e-6);
         return [o] {
+            // Checked before training (minutes), not only when the model is written.
+            if (const auto problem = io::output_path_problem(o->out, "network model")) throw EmadiagError(*problem);
             const Dataset d = read_dataset(o->dataset);
             TrainOptions t;
             t.spec.load_case = sim::to_string(d.spec.load_case);

@@ -1,6 +1,7 @@
 #include "core/run_csv.hpp"
 
 #include "core/emadiag_error.hpp"
+#include "emadiag/io/output_path.hpp"
 
 #include <charconv>
 #include <cmath>
@@ -46,6 +47,26 @@ bool parse_double(const std::string& text, double& out) {
     return ec == std::errc() && ptr == last;
 }
 
+/// std::getline that stores at most `max_bytes` of a line (the rest is skipped, `too_long` set),
+/// so one enormous line cannot make the reader allocate without limit.
+bool read_bounded_line(std::istream& in, std::string& line, std::size_t max_bytes, bool& too_long) {
+    line.clear();
+    too_long = false;
+    std::streambuf* sb = in.rdbuf();
+    bool any = false;
+    for (;;) {
+        const int c = sb->sbumpc();
+        if (c == std::char_traits<char>::eof()) {
+            in.setstate(std::ios::eofbit);
+            return any;
+        }
+        any = true;
+        if (c == '\n') return true;
+        if (line.size() < max_bytes) line.push_back(static_cast<char>(c));
+        else too_long = true;
+    }
+}
+
 }  // namespace
 
 void write_run_csv(std::ostream& out, const Run& run) {
@@ -70,7 +91,9 @@ void write_run_csv(std::ostream& out, const Run& run) {
 
 void write_run_csv_file(const std::string& path, const Run& run) {
     // Write to a temporary name and rename, so a failed write never leaves a truncated run behind.
+    if (const auto problem = io::output_path_problem(path, "run CSV")) throw EmadiagError(*problem);
     const std::string tmp = path + ".part";
+    if (const auto problem = io::output_path_problem(tmp, "run CSV (temporary)")) throw EmadiagError(*problem);
     {
         std::ofstream out(tmp);
         if (!out) throw EmadiagError("cannot open " + tmp + " for writing");
@@ -91,13 +114,25 @@ Run read_run_csv(std::istream& in, const std::string& name) {
     std::size_t line_no = 0;
     std::vector<std::string> header;
     std::size_t header_line = 0;
-    while (std::getline(in, line)) {
+    std::size_t meta_lines = 0, bad_rows = 0;
+    bool too_long = false;
+    while (read_bounded_line(in, line, kCsvMaxLineBytes, too_long)) {
         ++line_no;
+        if (too_long) {
+            problem(line_no, "line longer than the limit kCsvMaxLineBytes = " + std::to_string(kCsvMaxLineBytes) + " bytes");
+            if (++bad_rows > kCsvMaxBadRows) break;
+            continue;
+        }
         if (line.empty() || line == "\r") continue;
         if (line[0] == '#') {
             if (!header.empty()) {
                 problem(line_no, "metadata line after the header row");
+                if (++bad_rows > kCsvMaxBadRows) break;
                 continue;
+            }
+            if (++meta_lines > kCsvMaxMetaLines) {
+                problem(line_no, "more than the limit kCsvMaxMetaLines = " + std::to_string(kCsvMaxMetaLines) + " metadata lines");
+                break;
             }
             const std::string body = trim(line.substr(1));
             const auto eq = body.find('=');
@@ -114,6 +149,11 @@ Run read_run_csv(std::istream& in, const std::string& name) {
             header = split(line, ',');
             header_line = line_no;
             for (auto& h : header) h = trim(h);
+            if (header.size() > kCsvMaxColumns) {
+                problem(line_no, std::to_string(header.size()) + " columns exceed the limit kCsvMaxColumns = " +
+                                     std::to_string(kCsvMaxColumns));
+                break;
+            }
             for (std::size_t c = 0; c < std::size(kCsvRequiredColumns); ++c) {
                 if (c >= header.size() || header[c] != kCsvRequiredColumns[c]) {
                     problem(line_no, "header column " + std::to_string(c + 1) + " must be '" + kCsvRequiredColumns[c] +
@@ -125,17 +165,23 @@ Run read_run_csv(std::istream& in, const std::string& name) {
             }
             continue;
         }
+        if ((run.samples.size() + 1) * header.size() > kCsvMaxValues) {
+            problem(line_no, "more than " + std::to_string(run.samples.size()) + " rows of " + std::to_string(header.size()) +
+                                 " columns: the limit kCsvMaxValues = " + std::to_string(kCsvMaxValues) + " numbers per run");
+            break;
+        }
         const auto cells = split(line, ',');
         if (cells.size() != header.size()) {
             problem(line_no, "expected " + std::to_string(header.size()) + " columns, found " + std::to_string(cells.size()));
+            if (++bad_rows > kCsvMaxBadRows) break;
             continue;
         }
         double v[6];
         bool ok = true;
         for (std::size_t c = 0; c < cells.size(); ++c) {
             double x;
-            if (!parse_double(cells[c], x)) {
-                problem(line_no, "column '" + header[c] + "': '" + cells[c] + "' is not a number");
+            if (!parse_double(cells[c], x) || !std::isfinite(x)) {
+                problem(line_no, "column '" + header[c] + "': '" + cells[c].substr(0, 40) + "' is not a finite number");
                 ok = false;
                 continue;
             }
@@ -145,7 +191,12 @@ Run read_run_csv(std::istream& in, const std::string& name) {
                 run.extra_columns[c - 6].second.push_back(x);
             }
         }
-        if (!ok) continue;
+        if (!ok) {
+            // Extra columns parsed before the bad cell are dropped with the row, keeping them aligned.
+            for (auto& col : run.extra_columns) col.second.resize(run.samples.size());
+            if (++bad_rows > kCsvMaxBadRows) break;
+            continue;
+        }
         run.samples.push_back(RunSample{v[0], v[1], v[2], v[3], v[4], v[5]});
     }
     if (header.empty()) problem(line_no, "no header row (expected t_s,current_A,...)");
@@ -157,7 +208,7 @@ Run read_run_csv(std::istream& in, const std::string& name) {
             return;
         }
         double x;
-        if (!parse_double(*v, x) || (positive && !(x > 0))) {
+        if (!parse_double(*v, x) || !std::isfinite(x) || (positive && !(x > 0))) {
             problem(1, std::string("metadata ") + key + "=" + *v + " is not a positive number");
             return;
         }

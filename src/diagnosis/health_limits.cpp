@@ -2,6 +2,7 @@
 
 #include "core/emadiag_error.hpp"
 #include "estimation/dataset.hpp"
+#include "emadiag/io/bounded_json.hpp"
 #include "estimation/health_estimate.hpp"
 
 #include <algorithm>
@@ -36,7 +37,9 @@ HealthLimits HealthLimits::from_json(const nlohmann::json& j, const std::string&
     h.source = where;
     std::vector<std::string> problems;
     if (!j.is_object()) throw EmadiagError(where + ": limits must be a JSON object such as {\"FDJ_Nm\": {\"max\": 0.09}}");
-    for (const auto& [key, v] : j.items()) {
+    for (const auto& item : j.items()) {
+        const std::string& key = item.key();  // not a structured binding: clang captures none in a lambda
+        const nlohmann::json& v = item.value();
         auto it = std::find_if(h.limits.begin(), h.limits.end(), [&](const ParameterLimit& l) { return l.parameter == key; });
         if (it == h.limits.end()) {
             problems.push_back("unknown parameter \"" + key + "\" (expected FDJ_Nm, FSJ_Nm, eta_O or eta_A)");
@@ -66,15 +69,10 @@ HealthLimits HealthLimits::from_json(const nlohmann::json& j, const std::string&
 }
 
 HealthLimits HealthLimits::load(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw EmadiagError(path + ": cannot open the limits file");
-    nlohmann::json j;
-    try {
-        j = nlohmann::json::parse(in);
-    } catch (const nlohmann::json::parse_error& e) {
-        throw EmadiagError(path + ": not valid JSON: " + e.what());
-    }
-    return from_json(j, path);
+    std::string error;
+    const auto j = io::read_bounded_json_file(path, error);
+    if (!j) throw EmadiagError(path + (error == "cannot open" ? ": cannot open the limits file" : ": " + error));
+    return from_json(*j, path);
 }
 
 const ParameterLimit* HealthLimits::find(const std::string& parameter) const {

@@ -5,6 +5,9 @@
 
 #include "core/emadiag_error.hpp"
 #include "estimation/health_estimate.hpp"
+#include "emadiag/io/bounded_json.hpp"
+#include "emadiag/io/output_path.hpp"
+#include "emadiag/sim/sim_error.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -14,6 +17,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <optional>
 #include <random>
 
 namespace emadiag {
@@ -183,6 +187,7 @@ Dataset generate_dataset(const DatasetSpec& spec, unsigned threads, const Datase
 }
 
 void write_dataset(const std::string& path, const Dataset& dataset) {
+    if (const auto problem = io::output_path_problem(path, "dataset")) throw EmadiagError(*problem);
     std::ofstream out(path, std::ios::binary);
     if (!out) throw EmadiagError("cannot open " + path + " for writing");
     const std::size_t samples_per_run = dataset.runs.empty() ? 0 : dataset.runs.front().samples.size();
@@ -240,6 +245,19 @@ void write_dataset(const std::string& path, const Dataset& dataset) {
 Dataset read_dataset(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw EmadiagError("cannot open dataset " + path);
+    return read_dataset(in, path);
+}
+
+Dataset read_dataset(std::istream& in, const std::string& path) {
+    // The body's size follows from the header; it must match the bytes left in the stream, so a
+    // header announcing more runs or samples than the file holds is refused before any allocation.
+    const std::streampos start = in.tellg();
+    std::optional<std::uint64_t> total_bytes;
+    if (start != std::streampos(-1) && in.seekg(0, std::ios::end)) {
+        total_bytes = static_cast<std::uint64_t>(in.tellg() - start);
+        in.seekg(start);
+    }
+    in.clear();
     char magic[8] = {};
     in.read(magic, sizeof magic);
     if (!in || std::memcmp(magic, kMagic, sizeof magic) != 0) {
@@ -257,8 +275,11 @@ Dataset read_dataset(const std::string& path) {
     if (!in) throw EmadiagError(path + ": truncated header (" + std::to_string(length) + " bytes announced)");
     Dataset d;
     std::size_t runs = 0, samples_per_run = 0;
+    std::string json_error;
+    const auto parsed = io::parse_bounded_json(text, json_error);
+    if (!parsed) throw EmadiagError(path + ": bad header: " + json_error);
     try {
-        const auto h = nlohmann::json::parse(text);
+        const auto& h = *parsed;
         if (h.at("version").get<int>() != kFormatVersion) {
             throw EmadiagError(path + ": header field version " + h.at("version").dump() + " is not " +
                                std::to_string(kFormatVersion));
@@ -278,12 +299,29 @@ Dataset read_dataset(const std::string& path) {
                                 f.at("limit_cycle").get<int>(), f.at("non_physical").get<int>()};
     } catch (const nlohmann::json::exception& e) {
         throw EmadiagError(path + ": bad header: " + e.what());
+    } catch (const sim::SimError& e) {
+        throw EmadiagError(path + ": bad header: " + e.what());
+    }
+    if (samples_per_run > kMaxDatasetSamplesPerRun) {
+        throw EmadiagError(path + ": header samples_per_run " + std::to_string(samples_per_run) +
+                           " exceeds the limit kMaxDatasetSamplesPerRun = " + std::to_string(kMaxDatasetSamplesPerRun));
+    }
+    const std::uint64_t run_bytes = (kLabelCount + 1 + kColumns * std::uint64_t{samples_per_run}) * sizeof(double);
+    if (runs > kMaxDatasetBytes / run_bytes) {
+        throw EmadiagError(path + ": header announces " + std::to_string(runs) + " runs of " + std::to_string(samples_per_run) +
+                           " samples, more than the limit kMaxDatasetBytes = " + std::to_string(kMaxDatasetBytes) + " bytes");
+    }
+    const std::uint64_t body = runs * run_bytes, head = sizeof magic + sizeof length + length;
+    if (total_bytes && *total_bytes != head + body) {
+        throw EmadiagError(path + ": header announces " + std::to_string(runs) + " runs of " + std::to_string(samples_per_run) +
+                           " samples (" + std::to_string(head + body) + " bytes) but the file has " + std::to_string(*total_bytes) +
+                           " bytes");
     }
     std::vector<double> row(kColumns * samples_per_run);
-    d.runs.resize(runs);
+    d.runs.reserve(std::min<std::size_t>(runs, 4096));  // grows with what is actually read
     for (std::size_t i = 0; i < runs; ++i) {
         double labels[kLabelCount];
-        DatasetRun& r = d.runs[i];
+        DatasetRun& r = d.runs.emplace_back();
         in.read(reinterpret_cast<char*>(labels), sizeof labels);
         in.read(reinterpret_cast<char*>(&r.noise_seed), sizeof r.noise_seed);
         in.read(reinterpret_cast<char*>(row.data()), static_cast<std::streamsize>(row.size() * sizeof(double)));

@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -106,6 +107,12 @@ inline constexpr int kMaxSimulationsPerRun = 2;
 /// Binary file (docs/dataset-format.md). Throws EmadiagError naming the file and the problem.
 void write_dataset(const std::string& path, const Dataset& dataset);
 [[nodiscard]] Dataset read_dataset(const std::string& path);
+/// Reads a dataset from a stream (`name` in messages). A seekable stream must hold exactly the
+/// bytes its header announces; nothing is allocated beyond what the stream holds.
+[[nodiscard]] Dataset read_dataset(std::istream& in, const std::string& name);
+/// Limits of read_dataset (docs/limits.md): samples per run, and bytes of the whole body.
+inline constexpr std::size_t kMaxDatasetSamplesPerRun = 1'000'000;
+inline constexpr std::uint64_t kMaxDatasetBytes = std::uint64_t{16} << 30;
 
 /// Seeded shuffle split of n items into train/validation/test index lists (the paper's 75/15/10).
 struct Split {

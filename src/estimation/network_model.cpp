@@ -5,6 +5,8 @@
 
 #include "core/emadiag_error.hpp"
 #include "estimation/dataset.hpp"
+#include "emadiag/io/bounded_json.hpp"
+#include "emadiag/io/output_path.hpp"
 #include "emadiag/sim/ema_params.hpp"
 
 #include <algorithm>
@@ -84,18 +86,14 @@ NetworkModel NetworkModel::from_json(const nlohmann::json& j, const std::string&
 }
 
 NetworkModel NetworkModel::load(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw EmadiagError("cannot open network model " + path);
-    nlohmann::json j;
-    try {
-        in >> j;
-    } catch (const nlohmann::json::exception& e) {
-        throw EmadiagError(path + ": not valid JSON: " + e.what());
-    }
-    return from_json(j, path);
+    std::string error;
+    const auto j = io::read_bounded_json_file(path, error);
+    if (!j) throw EmadiagError(error == "cannot open" ? "cannot open network model " + path : path + ": " + error);
+    return from_json(*j, path);
 }
 
 void NetworkModel::save(const std::string& path) const {
+    if (const auto problem = io::output_path_problem(path, "network model")) throw EmadiagError(*problem);
     std::ofstream out(path);
     if (!out) throw EmadiagError("cannot open " + path + " for writing");
     out << to_json().dump() << '\n';

@@ -72,7 +72,7 @@ TEST(RunCsv, ReportsEveryProblemWithFileAndLine) {
         "0.001,1,x,3,4,5\n"
         "0.0015,1,2,3\n");
     EXPECT_THAT([&] { (void)read_run_csv(in, "bad.csv"); },
-                ThrowsMessage<EmadiagError>(AllOf(HasSubstr("bad.csv:6: column 'speed_rad_s': 'x' is not a number"),
+                ThrowsMessage<EmadiagError>(AllOf(HasSubstr("bad.csv:6: column 'speed_rad_s': 'x' is not a finite number"),
                                                   HasSubstr("bad.csv:7: expected 6 columns, found 4"),
                                                   HasSubstr("missing metadata key 'J_kgm2'"),
                                                   HasSubstr("metadata tau=abc is not a positive number"),

@@ -147,7 +147,7 @@ TEST(DatasetTest, FileRoundTripKeepsEverySample) {
         std::ofstream out(path, std::ios::binary | std::ios::trunc);
         out.write(bytes.data(), static_cast<std::streamsize>(bytes.size() - 100));
     }
-    EXPECT_THAT([&] { (void)read_dataset(path); }, ThrowsMessage<std::runtime_error>(HasSubstr("truncated at run 2 of 3")));
+    EXPECT_THAT([&] { (void)read_dataset(path); }, ThrowsMessage<std::runtime_error>(HasSubstr("header announces 3 runs of 1600 samples (230979 bytes) but the file has 230879 bytes")));
     {
         std::ofstream out(path, std::ios::binary | std::ios::trunc);
         out << "not a dataset";

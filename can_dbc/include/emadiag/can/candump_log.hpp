@@ -9,6 +9,8 @@
 
 #include <chrono>
 #include <fstream>
+#include <functional>
+#include <iosfwd>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -26,8 +28,20 @@ struct CandumpRecord {
 [[nodiscard]] std::string format_candump_line(const CanFrame& frame, const std::string& iface);
 /// Parses one line; on failure returns nullopt and puts the reason (with the column) in `error`.
 [[nodiscard]] std::optional<CandumpRecord> parse_candump_line(std::string_view line, std::string& error);
-/// Reads a whole log; throws CanError listing every bad line as "file:line:col: message".
-/// Empty lines are skipped.
+/// Limits of the readers (docs/limits.md): the longest line (the longest valid line, a CAN FD
+/// frame with a 29-bit id and 64 bytes, is about 200 bytes), the bad lines listed in one error
+/// (all are counted), and the frames of a log held in memory by read_candump / read_candump_file.
+inline constexpr std::size_t kCandumpMaxLineBytes = 1024;
+inline constexpr std::size_t kCandumpMaxReportedErrors = 20;
+inline constexpr std::size_t kCandumpMaxRecords = 1'000'000;
+
+/// Streams a log: calls `on_record` for each good line in order, in memory bounded by one line.
+/// Afterwards throws CanError listing the bad lines as "name:line:col: message" (the first
+/// kCandumpMaxReportedErrors, and how many there were). Empty lines are skipped.
+void for_each_candump_record(std::istream& in, const std::string& name, const std::function<void(CandumpRecord&&)>& on_record);
+/// Reads a whole log into memory (at most kCandumpMaxRecords frames); throws CanError listing the
+/// bad lines as for_each_candump_record does.
+[[nodiscard]] std::vector<CandumpRecord> read_candump(std::istream& in, const std::string& name);
 [[nodiscard]] std::vector<CandumpRecord> read_candump_file(const std::string& path);
 
 /// How much a CandumpWriter holds in memory before it writes to the file: whichever bound is

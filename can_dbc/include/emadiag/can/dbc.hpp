@@ -180,6 +180,15 @@ struct Database {
     [[nodiscard]] const Message& message(std::string_view name) const;
 };
 
+/// Limits of the DBC parser (docs/limits.md): the file size, the messages and signals it holds,
+/// and the problems listed in one error (all are counted). Past a message or signal limit parsing
+/// stops with a problem naming the limit.
+inline constexpr std::size_t kDbcMaxBytes = std::size_t{8} << 20;
+inline constexpr std::size_t kDbcMaxMessages = 8192;
+inline constexpr std::size_t kDbcMaxSignalsPerMessage = 1024;
+inline constexpr std::size_t kDbcMaxSignals = 100'000;
+inline constexpr std::size_t kDbcMaxReportedProblems = 100;
+
 /// Parses DBC text; `file_name` is used in messages. Throws CanError listing every problem.
 [[nodiscard]] Database parse_dbc(std::string_view text, const std::string& file_name);
 [[nodiscard]] Database parse_dbc_file(const std::string& path);

@@ -71,6 +71,8 @@ public:
     [[nodiscard]] Statement& cached(const std::string& sql);
 
 private:
+    /// Throws DbError, before anything is written, for a read-only file and for a corrupt or
+    /// truncated one (PRAGMA quick_check).
     void check_before_write();
     void migrate();
     sqlite3* db_ = nullptr;

@@ -1,0 +1,83 @@
+#pragma once
+// Reading JSON input files with bounded memory and stack (issue 12 part 2; docs/limits.md). Every
+// JSON loader (simulator parameters, network models, limits, augmented models, the dataset header)
+// parses through parse_bounded_json: the text is refused before parsing when it is larger than
+// kMaxJsonBytes or nests arrays/objects deeper than kMaxJsonDepth, so no input makes a later
+// recursive walk (dump, comparison, copy) recurse without limit.
+#include <nlohmann/json.hpp>
+
+#include <cstddef>
+#include <fstream>
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace emadiag::io {
+
+/// Deepest nesting of arrays and objects accepted (the project's files nest at most 4 deep).
+inline constexpr int kMaxJsonDepth = 64;
+/// Largest JSON file accepted (the shipped network models are about 0.55 MB).
+inline constexpr std::size_t kMaxJsonBytes = std::size_t{16} << 20;
+
+/// Parses `text`; on failure returns nullopt with the reason (the limit by name, or the parser's
+/// message with its byte position) in `error`.
+[[nodiscard]] inline std::optional<nlohmann::json> parse_bounded_json(std::string_view text, std::string& error) {
+    if (text.size() > kMaxJsonBytes) {
+        error = "JSON text of " + std::to_string(text.size()) + " bytes exceeds the limit kMaxJsonBytes = " +
+                std::to_string(kMaxJsonBytes);
+        return std::nullopt;
+    }
+    int depth = 0;
+    bool in_string = false, escaped = false;
+    for (std::size_t i = 0; i < text.size(); ++i) {
+        const char c = text[i];
+        if (in_string) {
+            if (escaped) escaped = false;
+            else if (c == '\\') escaped = true;
+            else if (c == '"') in_string = false;
+        } else if (c == '"') {
+            in_string = true;
+        } else if (c == '[' || c == '{') {
+            if (++depth > kMaxJsonDepth) {
+                error = "JSON nests deeper than the limit kMaxJsonDepth = " + std::to_string(kMaxJsonDepth) + " at byte " +
+                        std::to_string(i);
+                return std::nullopt;
+            }
+        } else if ((c == ']' || c == '}') && depth > 0) {
+            --depth;
+        }
+    }
+    try {
+        return nlohmann::json::parse(text.begin(), text.end());
+    } catch (const nlohmann::json::exception& e) {
+        // parse_error, and out_of_range 406 for a number beyond double (1e999): both bad input.
+        error = std::string("not valid JSON: ") + e.what();
+        return std::nullopt;
+    }
+}
+
+/// Reads a whole JSON file (at most kMaxJsonBytes) and parses it; on failure returns nullopt with
+/// the reason in `error` ("cannot open", the size limit, the depth limit, the parse error).
+[[nodiscard]] inline std::optional<nlohmann::json> read_bounded_json_file(const std::string& path, std::string& error) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) {
+        error = "cannot open";
+        return std::nullopt;
+    }
+    std::string text;
+    char buf[65536];
+    while (in.read(buf, sizeof buf) || in.gcount() > 0) {
+        text.append(buf, static_cast<std::size_t>(in.gcount()));
+        if (text.size() > kMaxJsonBytes) {
+            error = "file exceeds the limit kMaxJsonBytes = " + std::to_string(kMaxJsonBytes) + " bytes";
+            return std::nullopt;
+        }
+    }
+    if (in.bad()) {
+        error = "read error";
+        return std::nullopt;
+    }
+    return parse_bounded_json(text, error);
+}
+
+}  // namespace emadiag::io

@@ -1,0 +1,76 @@
+#!/usr/bin/env bash
+# Storage faults with the real command (issue 12 part 3; table in tests/README.md "Storage faults"):
+#   1. `emadiag history-sim` killed with SIGKILL at a random point, N times (default 50), on one
+#      database; after each kill PRAGMA integrity_check is ok and every session is whole;
+#   2. a full disk: history-sim into a database on a 2 MB tmpfs (needs mount, i.e. root); it must
+#      stop with "database or disk is full", leaving the sessions stored before it whole.
+# The unit test maintenance_db_storage_fault_test covers the same with the library (fork + SIGKILL),
+# two writers at once, an I/O error at every write and a full disk through a VFS shim, a corrupt,
+# truncated or read-only file.
+#   scripts/storage/run_storage_faults.sh [BUILD_DIR] [KILLS]
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+build=${1:-build}
+kills=${2:-50}
+emadiag=$build/src/emadiag
+[ -x "$emadiag" ] || { echo "run_storage_faults: $emadiag not built" >&2; exit 2; }
+command -v sqlite3 >/dev/null || { echo "run_storage_faults: sqlite3 missing (scripts/setup.sh)" >&2; exit 2; }
+work=$(mktemp -d)
+mnt=""
+cleanup() {
+  if [ -n "$mnt" ]; then umount "$mnt" 2>/dev/null || true; fi
+  rm -rf "$work"
+}
+trap cleanup EXIT
+
+# Every session has its 2 runs, each with samples and its raw log, and its findings.
+check_db() {
+  local db=$1 ic partial
+  ic=$(sqlite3 "$db" "PRAGMA integrity_check")
+  [ "$ic" = ok ] || { echo "integrity_check: $ic" >&2; return 1; }
+  partial=$(sqlite3 "$db" "SELECT COUNT(*) FROM test_sessions s WHERE
+      (SELECT COUNT(*) FROM runs r WHERE r.session_id = s.session_id) != 2
+      OR (SELECT COUNT(*) FROM findings f WHERE f.session_id = s.session_id) = 0
+      OR EXISTS (SELECT 1 FROM runs r WHERE r.session_id = s.session_id AND
+          (NOT EXISTS (SELECT 1 FROM samples m WHERE m.run_id = r.run_id)
+           OR NOT EXISTS (SELECT 1 FROM raw_logs l WHERE l.run_id = r.run_id)))")
+  [ "$partial" = 0 ] || { echo "$partial partial sessions" >&2; return 1; }
+  sqlite3 "$db" "SELECT COUNT(*) FROM test_sessions"
+}
+
+echo "== kill -9 of emadiag history-sim at random points, $kills times =="
+db=$work/kill.db
+before=0
+hot=0
+for i in $(seq 1 "$kills"); do
+  "$emadiag" history-sim --db "$db" --tail N123EM --sessions 1000 --noise none --seed "$i" >/dev/null 2>&1 &
+  pid=$!
+  sleep "0.$(printf '%03d' $((RANDOM % 900 + 50)))"
+  kill -9 "$pid" 2>/dev/null || true
+  wait "$pid" 2>/dev/null || true
+  [ -s "$db-journal" ] && hot=$((hot + 1))
+  # The library's open (quick_check) must accept it too; sqlite3 rolls a hot journal back first.
+  n=$(check_db "$db") || { echo "kill $i: database damaged" >&2; exit 1; }
+  [ "$n" -ge "$before" ] || { echo "kill $i: sessions went from $before to $n" >&2; exit 1; }
+  before=$n
+done
+echo "kill -9: $kills kills, $hot interrupted a transaction (hot journal), $before whole sessions, integrity ok, no partial session"
+
+echo "== full disk: history-sim on a 2 MB tmpfs =="
+mnt=$work/mnt
+mkdir -p "$mnt"
+if mount -t tmpfs -o size=2m tmpfs "$mnt" 2>/dev/null; then
+  set +e
+  out=$("$emadiag" history-sim --db "$mnt/full.db" --tail N123EM --sessions 50 --noise none 2>&1)
+  rc=$?
+  set -e
+  [ "$rc" -ne 0 ] || { echo "full disk: history-sim succeeded on a full disk?" >&2; exit 1; }
+  grep -q "database or disk is full" <<<"$out" || { echo "full disk: unclear error: $(tail -2 <<<"$out")" >&2; exit 1; }
+  n=$(check_db "$mnt/full.db") || { echo "full disk: database damaged" >&2; exit 1; }
+  echo "full disk: exit $rc, '$(grep -o 'database or disk is full' <<<"$out" | head -1)', $n whole sessions kept, integrity ok"
+  umount "$mnt"
+  mnt=""
+else
+  echo "full disk: SKIPPED (mount -t tmpfs not permitted here; the unit test's VFS shim covers SQLITE_FULL)"
+fi
+echo "run_storage_faults: passed"
