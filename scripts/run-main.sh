@@ -23,9 +23,21 @@ SESSIONS=12
 echo "   ($SESSIONS monthly pre-flight sessions of a transmission whose friction rises; true FDJ crosses its"
 echo "    0.096 N m limit at day 400, 70 days after the last session; FSJ crosses 0.144 N m at day 1200)"
 rm -rf out/trend && mkdir -p out/trend
-./build/src/emadiag history-sim --db out/trend/maintenance.db --tail N456EM --sessions "$SESSIONS" --days-between 30 \
+./build/src/emadiag history-sim --db out/trend/maintenance.db --tail N456EM --position LH-ELEV --sessions "$SESSIONS" --days-between 30 \
     --fdj-rate-per-100d 0.004 --fsj-rate-per-100d 0.002 --seed 3
+./build/src/emadiag history-sim --db out/trend/maintenance.db --tail N456EM --position RH-ELEV --serial 2002 --sessions "$SESSIONS" \
+    --days-between 30 --fdj-rate-per-100d 0.001 --fsj-rate-per-100d 0.0005 --seed 4
 ./build/src/emadiag trend --db out/trend/maintenance.db --tail N456EM
+echo
+echo "== emadiag report: the maintenance record of N456EM per position and serial, and its HTML report =="
+./build/src/emadiag report --db out/trend/maintenance.db --tail N456EM --format text
+./build/src/emadiag trend --db out/trend/maintenance.db --tail N456EM --format html --out out/trend/N456EM.html
+echo "wrote out/trend/N456EM.html ($(wc -c < out/trend/N456EM.html) bytes; one self-contained file, open it in any browser)"
+echo
+echo "== emadiag fleet: every tail and position, most urgent first =="
+./build/src/emadiag history-sim --db out/trend/maintenance.db --tail N789EM --position LH-ELEV --serial 3003 --sessions "$SESSIONS" \
+    --days-between 30 --fdj-rate-per-100d 0.002 --fsj-rate-per-100d 0.001 --seed 5
+./build/src/emadiag fleet --db out/trend/maintenance.db
 echo
 echo "== emadiag discover: closing the loop on a run with an effect the model was never told about =="
 echo "   (case B DYN, typical noise, viscous friction 2e-5 N m s/rad that the datasheet model lacks)"

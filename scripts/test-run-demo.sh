@@ -14,7 +14,8 @@ mkdir -p "$OUT"
     --idle-exit 3 > "$OUT/ema-sim.out" 2>&1 &
 EMA=$!
 for _ in $(seq 200); do grep -q "ema-sim on" "$OUT/ema-sim.out" 2>/dev/null && break; sleep 0.05; done
-"$EMADIAG" test-run --bus socketcan:vcan0 --tail N123EM --phase pre-flight --db "$OUT/maintenance.db" --out-dir "$OUT/test-runs"
+"$EMADIAG" test-run --bus socketcan:vcan0 --tail N123EM --phase pre-flight --db "$OUT/maintenance.db" --out-dir "$OUT/test-runs" \
+    --position LH-ELEV --cycles 18342 --hours 31207.5 --operator EMA-AIR --technician "J. Smith" --certificate B1-4471
 RC=$?
 wait "$EMA"
 echo "-- the simulated EMA's log --"

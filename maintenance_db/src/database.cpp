@@ -145,7 +145,7 @@ void Database::check_before_write() {
     }
     if (lines > 0) {
         throw DbError("database " + path_ + " is corrupt or truncated and was not opened (nothing was written to it; PRAGMA quick_check: " +
-                          problems + (lines > 3 ? "; ..." : "") + "); restore it from a backup",
+                          problems + (lines > 3 ? "; ..." : "") + "); it is left untouched: restore it from a backup",
                       DbErrorKind::Corrupt);
     }
 }

@@ -343,8 +343,7 @@ void EmaNode::stream_due(Clock::time_point now) {
         if (due > now) break;
         if (r.next == r.silent_at && !silent_) {
             event("going silent at sample " + std::to_string(r.next) + " (fault injection)");
-            silent_ = true;
-            tx_.clear();
+            silent_ = true;  // what is already queued (due before this sample) still goes out
         }
         const sim::Sample& s = r.samples[r.next];
         const auto index = static_cast<std::uint16_t>(r.next);

@@ -9,6 +9,8 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+
+#include <unistd.h>
 #include <fstream>
 
 namespace {
@@ -20,7 +22,8 @@ using ::testing::Not;
 class RecordCli : public ::testing::Test {
 protected:
     static void SetUpTestSuite() {
-        dir_ = std::filesystem::path(EMADIAG_BINARY_DIR) / "record_cli_test";
+        // One folder per process: ctest runs each test in a process of its own, in parallel.
+        dir_ = std::filesystem::path(EMADIAG_BINARY_DIR) / ("record_cli_test_" + std::to_string(::getpid()));
         std::filesystem::remove_all(dir_);
         std::filesystem::create_directories(dir_);
         db_ = (dir_ / "fleet.db").string();
