@@ -48,7 +48,9 @@ Recorder::Recorder(can::CanBus& bus, RecorderOptions options)
       heartbeat_(options_.shared_heartbeat ? *options_.shared_heartbeat : *own_heartbeat_) {}
 
 void Recorder::fail(const std::string& message) {
-    if (own_heartbeat_) own_heartbeat_->stop();
+    // Nothing more goes out once the session has failed (bus-off, no answer, a refusal): the
+    // heartbeat stops too, shared or not, and the EMA's watchdog holds a running sequence.
+    heartbeat_.stop();
     log_heartbeats(std::nullopt);
     writer_.flush();
     throw EmadiagError(message);
@@ -59,8 +61,9 @@ void Recorder::log(const can::CanFrame& f) {
     decoder_.feed(f);
 }
 
-void Recorder::log_heartbeats(std::optional<std::chrono::nanoseconds> upto) {
-    heartbeat_.take_sent(heartbeats_pending_);
+void Recorder::log_heartbeats(std::optional<std::chrono::nanoseconds> upto, bool take) {
+    if (take) heartbeat_.take_sent(heartbeats_pending_);
+    if (heartbeats_pending_.empty()) return;
     std::size_t n = 0;
     while (n < heartbeats_pending_.size() && (!upto || heartbeats_pending_[n].timestamp <= *upto)) log(heartbeats_pending_[n++]);
     heartbeats_pending_.erase(heartbeats_pending_.begin(), heartbeats_pending_.begin() + static_cast<std::ptrdiff_t>(n));
@@ -94,16 +97,20 @@ bool Recorder::pump(Clock::time_point deadline, const std::function<bool()>& don
         const auto wait = std::chrono::duration_cast<std::chrono::microseconds>(std::min(deadline, now + kMaxReceiveWait) - now);
         batch_.clear();
         (void)bus_.receive_batch(batch_, kReceiveBatch, std::max(wait, std::chrono::microseconds{0}));
-        if (!batch_.empty()) ++loop_.receive_calls;
+        if (!batch_.empty()) {
+            ++loop_.receive_calls;
+            heartbeat_.take_sent(heartbeats_pending_);  // once per batch: merged below by time
+        }
+        bool ema_seen = false;
         for (auto& r : batch_) {
             ++loop_.frames_received;
             // The heartbeats this tool sent before the frame arrived go into the log before it.
-            if (r.frame.timestamp.count() > 0) log_heartbeats(r.frame.timestamp);
+            if (r.frame.timestamp.count() > 0) log_heartbeats(r.frame.timestamp, false);
             if (r.status == can::ReceiveStatus::Frame) {
                 log(r.frame);
                 if (is_ema_frame(r.frame)) {
                     ++ema_frames_;
-                    last_ema_frame_ = Clock::now();
+                    ema_seen = true;
                 } else if (is_tool_frame(r.frame) && !other_tool_) {
                     other_tool_ = (r.frame.id == can::icd::kToolCommandId ? "TOOL_Command (0x010)" : "TOOL_Heartbeat (0x011)") +
                                   std::string(" from another tool");
@@ -118,6 +125,7 @@ bool Recorder::pump(Clock::time_point deadline, const std::function<bool()>& don
                 fail(bus_.spec() + ": the replayed log ended while waiting");
             }
         }
+        if (ema_seen) last_ema_frame_ = Clock::now();
         log_heartbeats(unix_now() - std::chrono::duration_cast<std::chrono::nanoseconds>(kHeartbeatLogHold));
     }
 }

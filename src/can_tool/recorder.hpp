@@ -33,7 +33,8 @@ struct RecorderOptions {
     bool send_heartbeat = true;                            ///< false only to test the EMA's watchdog
     /// A heartbeat that spans several sequences (test-run: it keeps going between them, while runs
     /// are estimated, so no other tool finds the bus free); started here if not yet running, and
-    /// left running. Null: the recorder runs its own for the one sequence.
+    /// left running (stopped only when the recording fails). Null: the recorder runs its own for the
+    /// one sequence.
     HeartbeatSender* shared_heartbeat = nullptr;
 };
 
@@ -75,7 +76,8 @@ private:
     bool pump(Clock::time_point deadline, const std::function<bool()>& done, const std::atomic<bool>* interrupt = nullptr);
     std::string no_answer(const std::string& awaited, const std::string& after) const;
     /// Writes the heartbeats sent up to `upto` (all of them when nullopt) to the log, in time order.
-    void log_heartbeats(std::optional<std::chrono::nanoseconds> upto);
+    /// `take`: first collect what the heartbeat thread sent since the last call.
+    void log_heartbeats(std::optional<std::chrono::nanoseconds> upto, bool take = true);
     void log(const can::CanFrame& f);
     /// Throws (after flushing the log) when the heartbeat thread could not send.
     void check_heartbeat() const;

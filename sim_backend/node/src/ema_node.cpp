@@ -30,6 +30,9 @@ constexpr std::chrono::milliseconds kMaxLoopSleep{2};
 /// Telemetry pacing: a sample is sent no earlier than its due time and at most this much after
 /// it, so one wake-up and one transmit call carry every sample due in the window (can_dbc/ICD.md).
 constexpr std::chrono::microseconds kTelemetryBatchWindow{1000};
+/// Within this much of the heartbeat deadline the EMA sends frame by frame, checking its watchdog
+/// before each, instead of one batched call.
+constexpr std::chrono::milliseconds kBatchGuard{40};
 /// Frames taken from the bus per receive call.
 constexpr std::size_t kReceiveBatch = 64;
 constexpr double kMaxTimeScale = 1000.0;
@@ -139,10 +142,29 @@ void EmaNode::flush_tx() {
         tx_.erase(std::remove_if(tx_.begin(), tx_.begin() + static_cast<std::ptrdiff_t>(queued), is_stream),
                   tx_.begin() + static_cast<std::ptrdiff_t>(queued));
     }
+    const auto is_telemetry = [](const can::CanFrame& f) { return f.id == can::icd::kTelemetryAId || f.id == can::icd::kTelemetryBId; };
+    // Near the watchdog deadline, frame by frame with a check before each: a process descheduled
+    // between a check and its write then leaks at most one frame past the deadline, never a batch.
+    const bool near_deadline = status_.mode == Mode::GroundTest && status_.state == SequenceState::Running &&
+                               Clock::now() - last_heartbeat_ > config_.heartbeat_timeout - kBatchGuard;
+    if (near_deadline) {
+        const std::size_t queued_before = tx_.size();
+        bool expired = false;
+        for (std::size_t i = 0; i < tx_.size(); ++i) {
+            // Past the deadline only what finish() appended (the ABORTED status) goes out.
+            const bool stream = is_telemetry(tx_[i]) || tx_[i].id == can::icd::kStatusId;
+            if (i < queued_before && stream && (expired || (expired = watchdog_expired()))) continue;
+            ++stats_.send_calls;
+            if (bus_.send(tx_[i]) != can::SendStatus::Sent) ++stats_.send_failures;
+            else if (is_telemetry(tx_[i])) ++stats_.telemetry_frames_sent;
+        }
+        tx_.clear();
+        return;
+    }
     const can::BatchSendResult r = bus_.send_batch(tx_);
     ++stats_.send_calls;
     for (std::size_t i = 0; i < r.sent; ++i)
-        if (tx_[i].id == can::icd::kTelemetryAId || tx_[i].id == can::icd::kTelemetryBId) ++stats_.telemetry_frames_sent;
+        if (is_telemetry(tx_[i])) ++stats_.telemetry_frames_sent;
     stats_.send_failures += tx_.size() - r.sent;
     tx_.clear();
 }
