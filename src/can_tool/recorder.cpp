@@ -28,6 +28,10 @@ bool is_tool_frame(const can::CanFrame& f) {
     return !f.extended && !f.error && (f.id == can::icd::kToolCommandId || f.id == can::icd::kToolHeartbeatId);
 }
 
+bool is_abort(const can::CanFrame& f) {
+    return f.id == can::icd::kToolCommandId && f.len >= 1 && f.data[0] == static_cast<std::uint8_t>(can::icd::Command::Abort);
+}
+
 std::chrono::nanoseconds unix_now() {
     return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch());
 }
@@ -111,7 +115,9 @@ bool Recorder::pump(Clock::time_point deadline, const std::function<bool()>& don
                 if (is_ema_frame(r.frame)) {
                     ++ema_frames_;
                     ema_seen = true;
-                } else if (is_tool_frame(r.frame) && !other_tool_) {
+                } else if (is_tool_frame(r.frame) && !other_tool_ && !is_abort(r.frame)) {
+                    // (An ABORT from anyone, e.g. `cansend` from a shell, is a safety action that
+                    // ends the run ABORTED like Ctrl-C, not a conflict.)
                     other_tool_ = (r.frame.id == can::icd::kToolCommandId ? "TOOL_Command (0x010)" : "TOOL_Heartbeat (0x011)") +
                                   std::string(" from another tool");
                 }

@@ -17,6 +17,13 @@
 #include <gtest/gtest.h>
 
 #include <dirent.h>
+#include <filesystem>
+#include <cstring>
+#include <sys/socket.h>
+#include <sys/ioctl.h>
+#include <net/if.h>
+#include <linux/can/raw.h>
+#include <linux/can.h>
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
@@ -347,7 +354,17 @@ TEST_F(Vcan, CandumpRecordingDecodesToTheSameSamples) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
     auto rec = start_record("dyn", "session");
     ASSERT_EQ(rec->wait(std::chrono::seconds(60)), 0) << rec->out() << rec->err();
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    // candump may be behind on a loaded host: stop it once its log has stopped growing.
+    {
+        std::uintmax_t last = 0;
+        for (int still = 0, i = 0; still < 5 && i < 200; ++i) {
+            std::this_thread::sleep_for(std::chrono::milliseconds(100));
+            std::error_code ec;
+            const auto now = std::filesystem::file_size(log_of(), ec);
+            still = now == last ? still + 1 : 0;
+            last = now;
+        }
+    }
     candump.signal(SIGINT);
     candump.wait(std::chrono::seconds(5));
     std::string log;
@@ -615,10 +632,27 @@ TEST_F(Vcan, FaultTableErrorFramesThenBusOffEndTheTestCleanly) {
     auto ema = start_ema_idle({"--case", "A"});
     auto run = start_test_run("test-run", "m.db", "logs", {"--sequences", "brk"});
     ASSERT_TRUE(ema->wait_output("streaming", std::chrono::seconds(30))) << ema->out();
-    for (const char* frame : {"20000004#0004000000000000", "20000004#0010000000000000", "20000040#0000000000000000"}) {
-        Process cansend({"cansend", iface(), frame}, path("cansend.out"));
-        ASSERT_EQ(cansend.wait(std::chrono::seconds(5)), 0) << cansend.err();
-        std::this_thread::sleep_for(std::chrono::milliseconds(30));
+    {
+        // As a controller reports them (CAN_ERR_FLAG in the id), from a raw socket of this process
+        // so they arrive within milliseconds, mid-sequence: error passive twice, then bus-off.
+        const int fd = ::socket(PF_CAN, SOCK_RAW, CAN_RAW);
+        ASSERT_GE(fd, 0);
+        ifreq ifr{};
+        std::strncpy(ifr.ifr_name, iface().c_str(), IFNAMSIZ - 1);
+        ASSERT_EQ(::ioctl(fd, SIOCGIFINDEX, &ifr), 0);
+        sockaddr_can addr{};
+        addr.can_family = AF_CAN;
+        addr.can_ifindex = ifr.ifr_ifindex;
+        ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+        for (const auto& [id, byte1] : {std::pair{0x20000004u, 0x04}, std::pair{0x20000004u, 0x10}, std::pair{0x20000040u, 0x00}}) {
+            can_frame cf{};
+            cf.can_id = id;
+            cf.len = 8;
+            cf.data[1] = static_cast<__u8>(byte1);
+            ASSERT_EQ(::write(fd, &cf, sizeof cf), static_cast<ssize_t>(sizeof cf));
+            std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        }
+        ::close(fd);
     }
     const int rc = run->wait(std::chrono::seconds(30));
     std::cout << run->out() << run->err();
