@@ -44,7 +44,7 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-std::string iface() {
+std::string vcan_iface() {
     const char* v = std::getenv("EMADIAG_VCAN_IFACE");
     return v ? v : "vcan0";
 }
@@ -52,7 +52,7 @@ std::string time_scale() {
     const char* v = std::getenv("EMADIAG_VCAN_TIME_SCALE");
     return v ? v : "2";
 }
-std::string bus_spec() { return "socketcan:" + iface(); }
+std::string bus_spec() { return "socketcan:" + vcan_iface(); }
 
 std::string slurp(const std::string& path) {
     std::ifstream in(path);
@@ -137,7 +137,7 @@ public:
                ::testing::UnitTest::GetInstance()->current_test_info()->name();
         ASSERT_EQ(std::system(("rm -rf '" + dir_ + "' && mkdir -p '" + dir_ + "'").c_str()), 0);
         // Fail (never skip) when the bus is missing.
-        ASSERT_NO_THROW(can::SocketCanBus probe(iface())) << "no " << iface() << ": run scripts/vcan/run_vcan_tests.sh";
+        ASSERT_NO_THROW(can::SocketCanBus probe(vcan_iface())) << "no " << vcan_iface() << ": run scripts/vcan/run_vcan_tests.sh";
     }
     std::string path(const std::string& name) const { return dir_ + "/" + name; }
 
@@ -235,8 +235,8 @@ TEST_F(Vcan, InterlockRefusalIsAClearErrorWithTheReason) {
 TEST_F(Vcan, HeartbeatStopsThenEmaAbortsWithin100ms) {
     auto ema = start_ema({"--case", "A"});
     const can::EmaIcd icd;
-    can::SocketCanBus tool(iface());
-    can::SocketCanBus observer(iface());  // sees the tool's frames and the EMA's, with kernel timestamps
+    can::SocketCanBus tool(vcan_iface());
+    can::SocketCanBus observer(vcan_iface());  // sees the tool's frames and the EMA's, with kernel timestamps
     ASSERT_EQ(tool.send(icd.encode_command({can::icd::Command::EnterGroundTest, {}, 0})), can::SendStatus::Sent);
     ASSERT_EQ(tool.send(icd.encode_command({can::icd::Command::StartSequence, can::icd::TestSequence::Brk, 21})), can::SendStatus::Sent);
     // 50 Hz heartbeat for 300 ms, then none: the tool's own heartbeat thread (SCHED_FIFO in the
@@ -337,7 +337,7 @@ TEST_F(Vcan, CandumpRecordingDecodesToTheSameSamples) {
     auto ema = start_ema({"--case", "B", "--noise", "typical", "--seed", "5"});
     // -r: a large receive buffer, as emadiag's SocketCanBus uses; with the default one candump drops
     // frames at the real-time 4000 frames/s on the single CPU of the user-mode Linux guest.
-    Process candump({"candump", "-l", "-r", "8388608", iface()}, path("candump.out"), dir_);
+    Process candump({"candump", "-l", "-r", "8388608", vcan_iface()}, path("candump.out"), dir_);
     // candump creates its log once its socket is bound: start the session only then (a process
     // takes a while to start in user-mode Linux on a loaded host).
     const auto log_of = [&] {
@@ -394,7 +394,7 @@ TEST_F(Vcan, CansendAbortStopsTheEma) {
     auto rec = start_record("brk", "aborted");
     ASSERT_TRUE(ema->wait_output("streaming", std::chrono::seconds(20))) << ema->out();
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    Process cansend({"cansend", iface(), "010#04000000"}, path("cansend.out"));
+    Process cansend({"cansend", vcan_iface(), "010#04000000"}, path("cansend.out"));
     EXPECT_EQ(cansend.wait(std::chrono::seconds(5)), 0) << cansend.err();
     EXPECT_EQ(rec->wait(std::chrono::seconds(20)), 130) << rec->out() << rec->err();
     EXPECT_EQ(ema->wait(std::chrono::seconds(10)), 0);
@@ -426,8 +426,8 @@ TEST_F(Vcan, CtrlCOnRecordSendsAbortAndKeepsThePartialLog) {
 }
 
 TEST_F(Vcan, SocketCanFiltersFdFramesTimestampsTimeoutAndErrorFrames) {
-    can::SocketCanBus rx(iface());
-    can::SocketCanBus tx(iface());
+    can::SocketCanBus rx(vcan_iface());
+    can::SocketCanBus tx(vcan_iface());
     EXPECT_GE(rx.receive_buffer_bytes(), std::size_t{1} << 20) << "large receive buffer";
     // Timeout: nothing on the bus.
     const auto t0 = Clock::now();
@@ -467,12 +467,12 @@ TEST_F(Vcan, SocketCanFiltersFdFramesTimestampsTimeoutAndErrorFrames) {
     EXPECT_EQ(r.frame.len, 64);
     EXPECT_EQ(r.frame.data, fd.data);
     // Error frames as a controller reports them (injected with cansend: CAN_ERR_FLAG in the id).
-    Process crtl({"cansend", iface(), "20000004#0004000000000000"}, path("err1.out"));  // controller: rx error passive
+    Process crtl({"cansend", vcan_iface(), "20000004#0004000000000000"}, path("err1.out"));  // controller: rx error passive
     ASSERT_EQ(crtl.wait(std::chrono::seconds(5)), 0) << crtl.err();
     r = rx.receive(std::chrono::milliseconds(500));
     EXPECT_EQ(r.status, can::ReceiveStatus::ErrorFrame) << can::to_string(r.status);
     EXPECT_THAT(r.detail, HasSubstr("controller problem"));
-    Process busoff({"cansend", iface(), "20000040#0000000000000000"}, path("err2.out"));
+    Process busoff({"cansend", vcan_iface(), "20000040#0000000000000000"}, path("err2.out"));
     ASSERT_EQ(busoff.wait(std::chrono::seconds(5)), 0) << busoff.err();
     r = rx.receive(std::chrono::milliseconds(500));
     EXPECT_EQ(r.status, can::ReceiveStatus::BusOff) << can::to_string(r.status);
@@ -638,7 +638,7 @@ TEST_F(Vcan, FaultTableErrorFramesThenBusOffEndTheTestCleanly) {
         const int fd = ::socket(PF_CAN, SOCK_RAW, CAN_RAW);
         ASSERT_GE(fd, 0);
         ifreq ifr{};
-        std::strncpy(ifr.ifr_name, iface().c_str(), IFNAMSIZ - 1);
+        std::strncpy(ifr.ifr_name, vcan_iface().c_str(), IFNAMSIZ - 1);
         ASSERT_EQ(::ioctl(fd, SIOCGIFINDEX, &ifr), 0);
         sockaddr_can addr{};
         addr.can_family = AF_CAN;
