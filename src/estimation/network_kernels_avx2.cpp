@@ -7,7 +7,9 @@
 // everything after it for avx2; GCC does not define the feature macros for a pragma, so they are
 // defined here for Eigen's ConfigureVectorization.h. Eigen itself is renamed (Eigen -> Eigen_avx2),
 // so none of its functions is shared with the baseline copy the rest of the program uses.
-#if defined(__x86_64__) || defined(__i386__)
+// Clang (the fuzz build) does not carry #pragma GCC target into Eigen's inline assembly: there this
+// variant forwards to the baseline one, like on a CPU that is not x86.
+#if (defined(__x86_64__) || defined(__i386__)) && !defined(__clang__)
 #include <algorithm>
 #include <array>
 #include <cassert>
@@ -48,7 +50,7 @@
 #pragma GCC diagnostic pop
 #pragma GCC pop_options
 #else
-// Not x86: network.cpp never calls this variant; it forwards to the baseline one.
+// Not x86 (network.cpp never calls this variant), or clang: it forwards to the baseline one.
 #include "estimation/network_kernels.hpp"
 namespace emadiag::nn_kernels::avx2 {
 void forward(const NetworkView& n, const double* x, long cols, double* y) { baseline::forward(n, x, cols, y); }
