@@ -45,6 +45,7 @@ std::string format_candump_line(const CanFrame& f, const std::string& iface) {
         s += kHex[(f.brs ? kFdFlagBrs : 0) | (f.esi ? kFdFlagEsi : 0)];
     } else if (f.rtr) {
         s += 'R';
+        if (f.len > 0) s += static_cast<char>('0' + f.len);  // the requested length, as candump writes it
         return s;
     }
     for (std::size_t i = 0; i < f.len; ++i) {
@@ -130,7 +131,12 @@ std::optional<CandumpRecord> parse_candump_line(std::string_view line, std::stri
     } else if (i < line.size() && (line[i] == 'R' || line[i] == 'r')) {
         f.rtr = true;
         ++i;
-        if (i < line.size() && std::isdigit(static_cast<unsigned char>(line[i]))) f.len = static_cast<std::uint8_t>(line[i++] - '0');
+        if (i < line.size() && std::isdigit(static_cast<unsigned char>(line[i]))) {
+            if (line[i] > '8') return fail(i, "remote request length above 8");
+            f.len = static_cast<std::uint8_t>(line[i++] - '0');
+        }
+        if (i < line.size() && !std::isspace(static_cast<unsigned char>(line[i])))
+            return fail(i, "unexpected text after the remote request");
     }
     std::size_t n = 0;
     while (!f.rtr && i < line.size() && !std::isspace(static_cast<unsigned char>(line[i]))) {
