@@ -1,4 +1,5 @@
 #include "emadiag/can/candump_log.hpp"
+#include "emadiag/io/bounded_line.hpp"
 
 #include "emadiag/can/can_error.hpp"
 #include "emadiag/io/output_path.hpp"
@@ -157,24 +158,6 @@ std::optional<CandumpRecord> parse_candump_line(std::string_view line, std::stri
     return r;
 }
 
-static bool read_bounded_line(std::istream& in, std::string& line, std::size_t max_bytes, bool& too_long) {
-    line.clear();
-    too_long = false;
-    std::streambuf* sb = in.rdbuf();
-    bool any = false;
-    for (;;) {
-        const int c = sb->sbumpc();
-        if (c == std::char_traits<char>::eof()) {
-            in.setstate(std::ios::eofbit);
-            return any;
-        }
-        any = true;
-        if (c == '\n') return true;
-        if (line.size() < max_bytes) line.push_back(static_cast<char>(c));
-        else too_long = true;  // the rest of the line is skipped, never stored
-    }
-}
-
 void for_each_candump_record(std::istream& in, const std::string& name, const std::function<void(CandumpRecord&&)>& on_record) {
     std::vector<std::string> errors;
     std::size_t bad_lines = 0;
@@ -184,7 +167,7 @@ void for_each_candump_record(std::istream& in, const std::string& name, const st
     auto bad = [&](std::string text) {
         if (++bad_lines <= kCandumpMaxReportedErrors) errors.push_back(name + ":" + std::to_string(lineno) + ":" + text);
     };
-    while (read_bounded_line(in, line, kCandumpMaxLineBytes, too_long)) {
+    while (io::read_bounded_line(in, line, kCandumpMaxLineBytes, too_long)) {
         ++lineno;
         if (too_long) {
             bad("1: line longer than the limit kCandumpMaxLineBytes = " + std::to_string(kCandumpMaxLineBytes) + " bytes");

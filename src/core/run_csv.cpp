@@ -1,4 +1,5 @@
 #include "core/run_csv.hpp"
+#include "emadiag/io/bounded_line.hpp"
 
 #include "core/emadiag_error.hpp"
 #include "emadiag/io/output_path.hpp"
@@ -45,26 +46,6 @@ bool parse_double(const std::string& text, double& out) {
     if (*first == '+') ++first;
     auto [ptr, ec] = std::from_chars(first, last, out);
     return ec == std::errc() && ptr == last;
-}
-
-/// std::getline that stores at most `max_bytes` of a line (the rest is skipped, `too_long` set),
-/// so one enormous line cannot make the reader allocate without limit.
-bool read_bounded_line(std::istream& in, std::string& line, std::size_t max_bytes, bool& too_long) {
-    line.clear();
-    too_long = false;
-    std::streambuf* sb = in.rdbuf();
-    bool any = false;
-    for (;;) {
-        const int c = sb->sbumpc();
-        if (c == std::char_traits<char>::eof()) {
-            in.setstate(std::ios::eofbit);
-            return any;
-        }
-        any = true;
-        if (c == '\n') return true;
-        if (line.size() < max_bytes) line.push_back(static_cast<char>(c));
-        else too_long = true;
-    }
 }
 
 }  // namespace
@@ -116,7 +97,7 @@ Run read_run_csv(std::istream& in, const std::string& name) {
     std::size_t header_line = 0;
     std::size_t meta_lines = 0, bad_rows = 0;
     bool too_long = false;
-    while (read_bounded_line(in, line, kCsvMaxLineBytes, too_long)) {
+    while (io::read_bounded_line(in, line, kCsvMaxLineBytes, too_long)) {
         ++line_no;
         if (too_long) {
             problem(line_no, "line longer than the limit kCsvMaxLineBytes = " + std::to_string(kCsvMaxLineBytes) + " bytes");
