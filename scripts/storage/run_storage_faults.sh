@@ -2,7 +2,9 @@
 # Storage faults with the real command (issue 12 part 3; table in tests/README.md "Storage faults"):
 #   1. `emadiag history-sim` killed with SIGKILL at a random point, N times (default 50), on one
 #      database; after each kill PRAGMA integrity_check is ok and every session is whole;
-#   2. a full disk: history-sim into a database on a 2 MB tmpfs (needs mount, i.e. root); it must
+#   2. `emadiag import` of a run killed the same way, N times; every session is whole (its run,
+#      samples, raw log and findings) and the next import still stores;
+#   3. a full disk: history-sim into a database on a 2 MB tmpfs (needs mount, i.e. root); it must
 #      stop with "database or disk is full", leaving the sessions stored before it whole.
 # The unit test maintenance_db_storage_fault_test covers the same with the library (fork + SIGKILL),
 # two writers at once, an I/O error at every write and a full disk through a VFS shim, a corrupt,
@@ -55,6 +57,55 @@ for i in $(seq 1 "$kills"); do
   before=$n
 done
 echo "kill -9: $kills kills, $hot interrupted a transaction (hot journal), $before whole sessions, integrity ok, no partial session"
+
+echo "== kill -9 of emadiag import at random points, $kills times =="
+# One imported run per session: its samples, its raw log (the run file as downloaded) and its findings.
+check_import_db() {
+  local db=$1 ic partial
+  # Killed before the schema was committed: no file, or a file with no table yet, holds 0 sessions.
+  [ -s "$db" ] || { echo 0; return 0; }
+  ic=$(sqlite3 "$db" "PRAGMA integrity_check")
+  [ "$ic" = ok ] || { echo "integrity_check: $ic" >&2; return 1; }
+  [ "$(sqlite3 "$db" "SELECT COUNT(*) FROM sqlite_master")" != 0 ] || { echo 0; return 0; }
+  partial=$(sqlite3 "$db" "SELECT COUNT(*) FROM test_sessions s WHERE
+      (SELECT COUNT(*) FROM runs r WHERE r.session_id = s.session_id) != 1
+      OR (SELECT COUNT(*) FROM findings f WHERE f.session_id = s.session_id) = 0
+      OR EXISTS (SELECT 1 FROM runs r WHERE r.session_id = s.session_id AND
+          (NOT EXISTS (SELECT 1 FROM samples m WHERE m.run_id = r.run_id)
+           OR NOT EXISTS (SELECT 1 FROM raw_logs l WHERE l.run_id = r.run_id)))")
+  [ "$partial" = 0 ] || { echo "$partial partial sessions" >&2; return 1; }
+  sqlite3 "$db" "SELECT COUNT(*) FROM test_sessions"
+}
+run=$work/import_run.csv
+"$emadiag" simulate --case B --sequence dyn --noise typical --seed 7 --out "$run" >/dev/null
+db=$work/import.db
+# The kill lands anywhere in one import's lifetime (parse, both estimators, the store transaction):
+# measure one import first and draw the kill time uniformly over 1.2 times that.
+t0=$(date +%s%N)
+"$emadiag" import "$run" --db "$work/import_time.db" --tail N123EM --position LH-ELEV --utc 2026-01-01T00:00:00Z >/dev/null
+span_ms=$(( ($(date +%s%N) - t0) * 12 / 10000000 + 1 ))
+before=0
+hot=0
+completed=0
+for i in $(seq 1 "$kills"); do
+  utc=$(printf '2026-01-%02dT%02d:%02d:00Z' $((i % 28 + 1)) $((i % 24)) $((i % 60)))
+  "$emadiag" import "$run" --db "$db" --tail N123EM --position LH-ELEV --utc "$utc" >/dev/null 2>&1 &
+  pid=$!
+  sleep "$(awk -v ms=$((RANDOM % span_ms)) 'BEGIN { printf "%.3f", ms / 1000 }')"
+  kill -9 "$pid" 2>/dev/null || true
+  if wait "$pid" 2>/dev/null; then completed=$((completed + 1)); fi
+  [ -s "$db-journal" ] && hot=$((hot + 1))
+  n=$(check_import_db "$db") || { echo "import kill $i: database damaged" >&2; exit 1; }
+  [ "$n" -ge "$before" ] && [ "$n" -le $((before + 1)) ] ||
+    { echo "import kill $i: sessions went from $before to $n" >&2; exit 1; }
+  before=$n
+done
+# The database the kills left behind still takes a new import (the library's open check accepts it).
+"$emadiag" import "$run" --db "$db" --tail N123EM --position LH-ELEV --utc 2026-02-01T00:00:00Z >/dev/null ||
+  { echo "import after the kills failed" >&2; exit 1; }
+n=$(check_import_db "$db") || { echo "import after the kills: database damaged" >&2; exit 1; }
+[ "$n" -eq $((before + 1)) ] || { echo "import after the kills: $before -> $n sessions" >&2; exit 1; }
+echo "kill -9 import: $kills kills over ${span_ms} ms, $completed finished before the kill, $hot interrupted a transaction (hot journal), $n whole sessions, integrity ok, no partial session"
 
 echo "== full disk: history-sim on a 2 MB tmpfs =="
 mnt=$work/mnt
