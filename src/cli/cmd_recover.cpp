@@ -19,10 +19,13 @@ const bool registered = register_command(Command{
         return [db] {
             const auto dir = spool_dir_for(*db);
             const auto recovered = recover_spooled_sessions(*db, [](const std::string& line) { std::cout << line << '\n' << std::flush; });
-            std::size_t stored = 0;
-            for (const auto& r : recovered) stored += r.db_session_id > 0 ? 1 : 0;
-            std::cout << "recover: " << stored << " spooled session(s) stored in " << *db << ", " << recovered.size() - stored
-                      << " found already stored; spool " << dir.string() << '\n';
+            std::size_t stored = 0, empty = 0;
+            for (const auto& r : recovered) {
+                stored += r.db_session_id > 0 ? 1 : 0;
+                empty += r.nothing_recorded ? 1 : 0;
+            }
+            std::cout << "recover: " << stored << " spooled session(s) stored in " << *db << ", " << recovered.size() - stored - empty
+                      << " found already stored, " << empty << " with nothing recorded; spool " << dir.string() << '\n';
             return 0;
         };
     }});

@@ -254,12 +254,25 @@ std::vector<RecoveredSession> recover_spooled_sessions(const std::string& db_pat
             rec.sequence = l.sequence;
             rec.attempt = l.attempt;
             rec.log_path = l.log_path;
+            std::error_code size_ec;
+            const auto log_bytes = std::filesystem::file_size(l.log_path, size_ec);
+            if (size_ec || log_bytes == 0) {
+                // Killed before a single frame was written: there is nothing to keep.
+                unreadable.push_back(l.sequence + " (" + l.log_path + "): " + (size_ec ? size_ec.message() : "empty") + ", nothing recorded");
+                continue;
+            }
             try {
                 rec.outcome.run = read_run_candump(l.log_path);
             } catch (const std::exception& e) {
-                // A log cut before the EMA identified itself holds no run; it is named, not stored.
-                unreadable.push_back(l.sequence + " (" + l.log_path + "): " + e.what());
-                continue;
+                // A log cut before the EMA identified itself holds no run, but its frames are the
+                // record of what happened on the bus: stored as an invalid run with no samples.
+                rec.outcome.run = Run{};
+                rec.outcome.run.sequence = l.sequence;
+                rec.outcome.run.set_meta("source", "candump log");
+                rec.outcome.run.set_meta("log_file", l.log_path);
+                rec.outcome.run.set_meta("status", "incomplete");
+                rec.outcome.run.set_meta("valid", "false");
+                rec.outcome.run.set_meta("invalid_reason", std::string("no run could be decoded from the raw log: ") + e.what());
             }
             rec.outcome.run.set_meta("tail_number", m.tail_number);
             rec.outcome.run.set_meta("phase", m.phase);
@@ -286,11 +299,17 @@ std::vector<RecoveredSession> recover_spooled_sessions(const std::string& db_pat
                        (m.logs.empty() ? std::string("nothing") : m.logs.back().sequence) + ")";
         }
         if (!unreadable.empty()) {
-            a.reason += "; raw log without a run:";
+            a.reason += "; raw log with no frame:";
             for (const auto& u : unreadable) a.reason += " " + u;
         }
         if (runs.empty()) {
-            say("spool: " + path.filename().string() + ": no run could be decoded (" + a.reason + "); left in place");
+            // No frame reached any raw log: the tool stopped before it commanded anything.
+            std::filesystem::remove(path, ec);
+            std::filesystem::remove(lock_path_for(path), ec);
+            rs.note = "nothing was recorded on the bus before the tool stopped";
+            rs.nothing_recorded = true;
+            say("spool: " + path.filename().string() + ": " + rs.note + " (" + a.reason + "); manifest removed");
+            out.push_back(rs);
             continue;
         }
         db::StoredTestSession s = session_parts::to_stored_session(m, runs, a);

@@ -79,6 +79,7 @@ struct RecoveredSession {
     std::int64_t db_session_id = 0;   ///< 0 when it was found already stored
     std::string verdict;
     std::string note;
+    bool nothing_recorded = false;  ///< no frame reached a raw log: the manifest was removed, nothing stored
 };
 
 /// Stores every spooled session of `db_path` (oldest first). A session already in the database

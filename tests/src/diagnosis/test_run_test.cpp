@@ -356,6 +356,58 @@ TEST_F(TestRun, SpooledSessionOfAKilledToolIsRecoveredOnceNeverTwice) {
     EXPECT_EQ(db::list_test_sessions(database, "N123EM").size(), 1u);
 }
 
+// Killed before the EMA identified itself: the frames the log holds are kept (an invalid run with
+// no samples, its raw log byte for byte); killed before any frame: nothing to keep, manifest removed.
+TEST_F(TestRun, SpooledSessionKilledBeforeTheEmaAnsweredKeepsItsFramesOrIsDroppedWhenEmpty) {
+    const TestRunOptions o = options("N123EM");
+    SessionManifest m;
+    m.tail_number = "N123EM";
+    m.phase = kPhasePreFlight;
+    m.started_utc = "2026-11-24T11:00:00Z";
+    m.tool_version = "test";
+    m.limits_json = HealthLimits::datasheet_envelope().to_json().dump();
+    m.sequences = {"dyn"};
+    const std::string cut_log = (dir_ / "cut_dyn.log").string();
+    std::ofstream(cut_log) << "(1795525640.771675) can0 011#0100000000000000\n"
+                              "(1795525640.791645) can0 010#0100000000000000\n";
+    {
+        SessionSpool spool(spool_dir_for(o.db_path), m);
+        spool.add_log(SpooledLog{"dyn", 1, cut_log});
+    }
+    const auto kept = recover_spooled_sessions(o.db_path, nullptr);
+    ASSERT_EQ(kept.size(), 1u);
+    EXPECT_GT(kept[0].db_session_id, 0);
+    EXPECT_FALSE(kept[0].nothing_recorded);
+    EXPECT_EQ(kept[0].verdict, "NO_TEST");
+    {
+        db::Database database(o.db_path);
+        const auto s = db::load_test_session(database, kept[0].db_session_id);
+        ASSERT_EQ(s.runs.size(), 1u);
+        EXPECT_FALSE(s.runs[0].valid);
+        EXPECT_THAT(s.runs[0].status_note, HasSubstr("no run could be decoded from the raw log"));
+        EXPECT_EQ(s.runs[0].raw_log, slurp(cut_log));
+    }
+    const std::string empty_log = (dir_ / "empty_dyn.log").string();
+    std::ofstream(empty_log).flush();
+    m.started_utc = "2026-11-24T12:00:00Z";
+    std::filesystem::path manifest;
+    {
+        SessionSpool spool(spool_dir_for(o.db_path), m);
+        spool.add_log(SpooledLog{"dyn", 1, empty_log});
+        manifest = spool.path();
+    }
+    std::vector<std::string> said;
+    const auto dropped = recover_spooled_sessions(o.db_path, [&](const std::string& l) { said.push_back(l); });
+    ASSERT_EQ(dropped.size(), 1u);
+    EXPECT_TRUE(dropped[0].nothing_recorded);
+    EXPECT_EQ(dropped[0].db_session_id, 0);
+    EXPECT_FALSE(std::filesystem::exists(manifest));
+    ASSERT_FALSE(said.empty());
+    EXPECT_THAT(said.back(), HasSubstr("nothing was recorded on the bus before the tool stopped"));
+    db::Database database(o.db_path);
+    EXPECT_EQ(db::list_test_sessions(database, "N123EM").size(), 1u);
+}
+
 TEST_F(TestRun, ASecondToolOnTheBusIsHeardAndNothingIsCommanded) {
     can::MemoryBusHub hub;
     can::MemoryBus tool(hub, "tool");
