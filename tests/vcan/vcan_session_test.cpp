@@ -682,7 +682,7 @@ TEST_F(Vcan, FaultTableToolKilledMidRunIsHeldByTheEmaAndRecoveredByTheNextTestRu
     const std::string tag = "heartbeat lost: none for ";
     const std::string o = ema->out();
     detected_ms = std::atof(o.c_str() + o.find(tag) + tag.size());
-    EXPECT_GT(detected_ms, 100.0);
+    EXPECT_GE(detected_ms, 100.0);  // past 100 ms; printed to 0.1 ms, so 100.04 reads "100.0"
     EXPECT_LT(detected_ms, 150.0) << o;  // held within the watchdog's period plus one descheduled pass
     ASSERT_EQ(ema->wait(std::chrono::seconds(20)), 0);  // idle exit: the tool is gone
 

@@ -271,10 +271,12 @@ void EmaNode::handle(const can::CanFrame& f, Clock::time_point now) {
         if (status_.mode == Mode::GroundTest) {
             // The gap the watchdog sees: since the previous heartbeat, or since entry to ground test.
             const Clock::time_point since = last_heartbeat_arrival_ ? std::max(*last_heartbeat_arrival_, last_heartbeat_) : last_heartbeat_;
-            heartbeat_gaps_ms_.push_back(std::chrono::duration<double, std::milli>(arrival - since).count());
+            if (arrival > since) heartbeat_gaps_ms_.push_back(std::chrono::duration<double, std::milli>(arrival - since).count());
         }
-        last_heartbeat_ = arrival;
-        last_heartbeat_arrival_ = arrival;
+        // Never backwards: a heartbeat that reached the bus before ENTER_GROUND_TEST but is handled
+        // after it in the same late batch must not move the watchdog's start before the entry.
+        last_heartbeat_ = std::max(last_heartbeat_, arrival);
+        last_heartbeat_arrival_ = last_heartbeat_arrival_ ? std::max(*last_heartbeat_arrival_, arrival) : arrival;
         return;
     }
     if (auto c = icd_.decode_command(f)) handle_command(*c, now);

@@ -121,6 +121,32 @@ TEST(EmaNode, HeartbeatLossAbortsAfter100ms) {
                                         " (tight bound: tests/vcan HeartbeatStopsThenEmaAbortsWithin100ms)";
 }
 
+// A late loop pass handles ENTER_GROUND_TEST and a heartbeat that reached the bus before it in one
+// batch: the heartbeat's older arrival time must not move the watchdog's start before the entry
+// (seen over vcan in a loaded user-mode Linux guest: "heartbeat lost" 60 ms after entry).
+TEST(EmaNode, AHeartbeatHandledLateNeverMovesTheWatchdogBeforeTheEntry) {
+    MemoryBusHub hub;
+    MemoryBus tool(hub, "tool");
+    MemoryBus ema_bus(hub, "ema");
+    node::EmaNode ema(ema_bus, base_config());
+    const EmaIcd icd;
+    ASSERT_EQ(tool.send(icd.encode_heartbeat(0)), SendStatus::Sent);
+    ASSERT_EQ(tool.send(icd.encode_command(ToolCommand{icd::Command::EnterGroundTest, {}, 0})), SendStatus::Sent);
+    ASSERT_EQ(tool.send(icd.encode_heartbeat(1)), SendStatus::Sent);
+    std::this_thread::sleep_for(std::chrono::milliseconds(60));  // the EMA's loop comes 60 ms late
+    ema.poll(std::chrono::microseconds(0));
+    ASSERT_EQ(ema.status().mode, icd::Mode::GroundTest);
+    const auto entered = Clock::now();
+    ASSERT_EQ(tool.send(icd.encode_command(ToolCommand{icd::Command::StartSequence, icd::TestSequence::Dyn, 3})), SendStatus::Sent);
+    // No heartbeat after the entry: the watchdog must wait its full 100 ms from the entry.
+    while (Clock::now() - entered < std::chrono::milliseconds(80)) ema.poll(std::chrono::microseconds(1000));
+    EXPECT_EQ(ema.status().state, icd::SequenceState::Running) << "aborted before 100 ms had passed since the entry";
+    while (Clock::now() - entered < std::chrono::milliseconds(300) && ema.status().state == icd::SequenceState::Running)
+        ema.poll(std::chrono::microseconds(1000));
+    EXPECT_EQ(ema.status().state, icd::SequenceState::Aborted);
+    EXPECT_EQ(ema.status().fault, icd::FaultCode::HeartbeatLost);
+}
+
 TEST(EmaNode, AbortStopsTheTelemetry) {
     MemoryBusHub hub;
     MemoryBus tool(hub, "tool");
