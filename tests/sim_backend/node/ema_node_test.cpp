@@ -7,6 +7,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <thread>
 
 using namespace emadiag;
@@ -152,9 +153,24 @@ TEST(EmaNode, AbortStopsTheTelemetry) {
     MemoryBus tool(hub, "tool");
     NodeRunner ema(hub, base_config());
     const EmaIcd icd;
+    // The tool's 50 Hz heartbeat (its own bus handle), so only the ABORT ends the sequence, however
+    // long the simulation takes on a loaded machine.
+    MemoryBus heartbeat_bus(hub, "heartbeat");
+    std::atomic<bool> stop{false};
+    std::thread heartbeat([&] {
+        for (std::uint8_t i = 0; !stop.load(); ++i) {
+            (void)heartbeat_bus.send(icd.encode_heartbeat(i));
+            std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        }
+    });
+    struct Join {
+        std::atomic<bool>& stop;
+        std::thread& t;
+        ~Join() { stop = true; t.join(); }
+    } join{stop, heartbeat};
     ASSERT_EQ(tool.send(icd.encode_command(ToolCommand{icd::Command::EnterGroundTest, {}, 0})), SendStatus::Sent);
     ASSERT_EQ(tool.send(icd.encode_command(ToolCommand{icd::Command::StartSequence, icd::TestSequence::Brk, 4})), SendStatus::Sent);
-    ASSERT_TRUE(wait_for(tool, [&](const CanFrame& fr) { return fr.id == icd::kTelemetryAId; }, std::chrono::milliseconds(3000)));
+    ASSERT_TRUE(wait_for(tool, [&](const CanFrame& fr) { return fr.id == icd::kTelemetryAId; }, std::chrono::milliseconds(10000)));
     ASSERT_EQ(tool.send(icd.encode_command(ToolCommand{icd::Command::Abort, {}, 0})), SendStatus::Sent);
     std::optional<EmaStatus> aborted;
     (void)wait_for(tool, [&](const CanFrame& fr) {
