@@ -80,15 +80,7 @@ inline void to_array(LaneVec v, double* out) { hn::StoreU(v.v, DTag(), out); }
 // but with this target's registers and instructions (AVX-512: 32 registers, no spills in the step;
 // AVX: three-operand forms and blends). The same IEEE operations in the same order (no FMA), so
 // every target's scalar path gives the baseline's results bit for bit.
-template <>
-struct Vec<1> {
-    using D = double;
-    using M = bool;
-};
-inline double sel(bool m, double a, double b) { return m ? a : b; }
-inline bool vnot(bool m) { return !m; }
-inline double vabs(double a) { return std::fabs(a); }
-inline void to_array(double v, double* out) { out[0] = v; }
+#include "scalar_lanes-inl.h"
 
 template <class D>
 inline D from_array(const double* in) {

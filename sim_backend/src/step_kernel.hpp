@@ -73,15 +73,7 @@ inline double command_deg_inline(Sequence seq, double t) {
 /// The scalar path's lane types: one double, one bool.
 template <int W>
 struct Vec;
-template <>
-struct Vec<1> {
-    using D = double;
-    using M = bool;
-};
-inline double sel(bool m, double a, double b) { return m ? a : b; }
-inline bool vnot(bool m) { return !m; }
-inline double vabs(double a) { return std::fabs(a); }
-inline void to_array(double v, double* out) { out[0] = v; }
+#include "scalar_lanes-inl.h"
 template <class D>
 inline D from_array(const double* in) { return in[0]; }
 
