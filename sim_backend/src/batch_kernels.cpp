@@ -75,7 +75,21 @@ inline LaneVec sel(LaneMask m, LaneVec a, LaneVec b) { return {hn::IfThenElse(m.
 inline LaneMask vnot(LaneMask m) { return {hn::Not(m.m)}; }
 inline LaneVec vabs(LaneVec a) { return {hn::Abs(a.v)}; }  // sign bit cleared, as std::fabs
 inline void to_array(LaneVec v, double* out) { hn::StoreU(v.v, DTag(), out); }
-inline LaneVec from_array(const double* in) { return {hn::LoadU(DTag(), in)}; }
+
+// The scalar path (W = 1) compiled for this target too: plain double and bool as in step_kernel.hpp,
+// but with this target's registers and instructions (AVX-512: 32 registers, no spills in the step;
+// AVX: three-operand forms and blends). The same IEEE operations in the same order (no FMA), so
+// every target's scalar path gives the baseline's results bit for bit.
+#include "scalar_lanes-inl.h"
+
+template <class D>
+inline D from_array(const double* in) {
+    if constexpr (std::is_same_v<D, double>) {
+        return in[0];
+    } else {
+        return LaneVec{hn::LoadU(DTag(), in)};
+    }
+}
 
 namespace self = ::emadiag::sim::HWY_NAMESPACE;
 #include "step_kernel-inl.h"
@@ -83,6 +97,7 @@ namespace self = ::emadiag::sim::HWY_NAMESPACE;
 void RunBatchGroup(const SimConfig* const* configs, SimResult* const* out) {
     self::run_group<kLanes, kGroups>(configs, out);
 }
+void RunScalar(const SimConfig* config, SimResult* out) { self::run_group<1, 1>(&config, &out); }
 detail::BatchShape GetBatchShape() { return {hwy::TargetName(HWY_TARGET), kLanes, kGroups}; }
 
 }  // namespace emadiag::sim::HWY_NAMESPACE
@@ -93,11 +108,13 @@ namespace emadiag::sim::detail {
 
 HWY_EXPORT(RunBatchGroup);
 HWY_EXPORT(GetBatchShape);
+HWY_EXPORT(RunScalar);
 
 void run_batch_group(const SimConfig* const* configs, SimResult* const* out) {
     HWY_DYNAMIC_DISPATCH(RunBatchGroup)(configs, out);
 }
 BatchShape batch_shape() { return HWY_DYNAMIC_DISPATCH(GetBatchShape)(); }
+void run_scalar(const SimConfig& config, SimResult& out) { HWY_DYNAMIC_DISPATCH(RunScalar)(&config, &out); }
 
 }  // namespace emadiag::sim::detail
 #endif  // HWY_ONCE

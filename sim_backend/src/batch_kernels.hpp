@@ -18,4 +18,8 @@ struct BatchShape {
 /// that many pointers (pad with copies). Finishes each run as simulate does.
 void run_batch_group(const SimConfig* const* configs, SimResult* const* out);
 
+/// One simulation on the scalar path (W = 1) compiled for the chosen target: the baseline
+/// run_group<1, 1>'s results bit for bit, faster on targets with more registers (batch_kernels.cpp).
+void run_scalar(const SimConfig& config, SimResult& out);
+
 }  // namespace emadiag::sim::detail

@@ -201,9 +201,13 @@ SimResult simulate(const SimConfig& config) {
     const CallTimer timer(g_scalar_ns);
     ++g_scalar_runs;
     SimResult result;
-    const SimConfig* cfg[1] = {&config};
-    SimResult* out[1] = {&result};
-    detail::run_group<1, 1>(cfg, out);
+    if (detail::batch_runs_scalar()) {  // EMADIAG_SIMD=scalar: the baseline build's copy
+        const SimConfig* cfg[1] = {&config};
+        SimResult* out[1] = {&result};
+        detail::run_group<1, 1>(cfg, out);
+    } else {  // the same step compiled for the chosen target (batch_kernels.cpp)
+        detail::run_scalar(config, result);
+    }
     return result;
 }
 

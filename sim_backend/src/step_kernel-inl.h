@@ -7,7 +7,7 @@
 // each instruction set gets its own copy compiled for it. The enclosing namespace provides:
 //   Vec<W>::D, Vec<W>::M           the lane vector of doubles and its mask;
 //   sel(M, D, D), vnot(M), vabs(D) select, mask negation, |x| (sign bit cleared);
-//   to_array(D, double*), from_array(const double*) -> D;
+//   to_array(D, double*), from_array<D>(const double*) -> D;
 //   namespace self                 an alias of the enclosing namespace (calls here are qualified,
 //                                  so argument-dependent lookup cannot pick another copy).
 // The operations are the same, in the same order, for every W (IEEE add, sub, mul, compare,
@@ -142,9 +142,9 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
             dyn_a[l] = spall + s.fx.stribeck_amplitude_nm * std::exp(-wr * wr);
             stat_a[l] = spall;
         }
-        t_m = from_array(tm_a);
-        extra_dyn = from_array(dyn_a);
-        extra_stat = from_array(stat_a);
+        t_m = self::from_array<D>(tm_a);
+        extra_dyn = self::from_array<D>(dyn_a);
+        extra_stat = self::from_array<D>(stat_a);
         viscous = s.fx.viscous_nm_s_rad * w0;
         // Backlash: inside the free play the load and the transmission friction are not felt.
         if (s.fx.backlash_rad > 0.0) in_gap = vabs(z.gap) < 0.5 * s.fx.backlash_rad;
@@ -356,6 +356,7 @@ inline void run_lanes(const detail::Shared& shared, Lanes<W>* z, SimResult* cons
 /// then finishes each run (truth, sensor effects, noise).
 template <int W, int G>
 inline void run_group(const SimConfig* const* configs, SimResult* const* out) {
+    using D = typename Vec<W>::D;
     const detail::Shared s = detail::make_shared(*configs[0]);
     auto z = std::make_unique<Lanes<W>[]>(G);
     for (int g = 0; g < G; ++g) {
@@ -367,10 +368,10 @@ inline void run_group(const SimConfig* const* configs, SimResult* const* out) {
             c_opp[l] = 1.0 / p.eta_o - 1.0;  // eq. (3), opposing
             c_aid[l] = 1.0 - p.eta_a;        // eq. (3), aiding
         }
-        z[g].fdj = from_array(fdj);
-        z[g].fsj = from_array(fsj);
-        z[g].c_opp = from_array(c_opp);
-        z[g].c_aid = from_array(c_aid);
+        z[g].fdj = self::from_array<D>(fdj);
+        z[g].fsj = self::from_array<D>(fsj);
+        z[g].c_opp = self::from_array<D>(c_opp);
+        z[g].c_aid = self::from_array<D>(c_aid);
     }
     bool full = false;
     bool truth = false;

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <numbers>
 #include <memory>
+#include <type_traits>
 
 namespace emadiag::sim::detail {
 
@@ -72,16 +73,9 @@ inline double command_deg_inline(Sequence seq, double t) {
 /// The scalar path's lane types: one double, one bool.
 template <int W>
 struct Vec;
-template <>
-struct Vec<1> {
-    using D = double;
-    using M = bool;
-};
-inline double sel(bool m, double a, double b) { return m ? a : b; }
-inline bool vnot(bool m) { return !m; }
-inline double vabs(double a) { return std::fabs(a); }
-inline void to_array(double v, double* out) { out[0] = v; }
-inline double from_array(const double* in) { return in[0]; }
+#include "scalar_lanes-inl.h"
+template <class D>
+inline D from_array(const double* in) { return in[0]; }
 
 /// Finishes a run after the integration: drops the truth unless asked for, applies the sensor
 /// effects, then the noise profile (simulator.cpp).

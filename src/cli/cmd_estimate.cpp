@@ -1,12 +1,18 @@
 // emadiag estimate RUN.csv|RUN.log [--model FILE] [--json]: health parameters of one run, by the
 // physics estimator (always) and the paper's network (with --model, or a shipped model in
 // models/ for the run's case and sequence). Text for people; --json is the stable schema of
-// docs/estimate-json.md.
+// docs/estimate-json.md. --model may also name an augmented model that `emadiag discover` wrote:
+// its effects and terms are removed from the run first (discovery/model_correction.hpp), the
+// estimators then fit the datasheet law to what is left, and the file with its SHA-256 is listed.
 #include "cli/command.hpp"
 #include "cli/run_file.hpp"
 #include "core/emadiag_error.hpp"
 #include "core/run_csv.hpp"
 #include "can_tool/candump_run.hpp"
+#include "discovery/augmented_model.hpp"
+#include "discovery/model_correction.hpp"
+#include "emadiag/db/sha256.hpp"
+#include "emadiag/io/bounded_json.hpp"
 #include "estimation/health_estimate.hpp"
 #include "estimation/run_checks.hpp"
 #include "estimation/run_estimator.hpp"
@@ -127,7 +133,8 @@ const bool registered = register_command(Command{
         auto model = std::make_shared<std::string>();
         auto json = std::make_shared<bool>(false);
         sub.add_option("run", *path, "Run file: RUN.csv (run CSV) or RUN.log (candump)")->required();
-        sub.add_option("--model", *model, "Network model JSON (default: a shipped model in models/ for the run's case)");
+        sub.add_option("--model", *model, "Network model JSON (default: a shipped model in models/ for the run's case), or "
+                                          "an augmented model JSON from `emadiag discover` (its terms are removed from the run first)");
         sub.add_flag("--json", *json, "Print the stable JSON schema of docs/estimate-json.md");
         return [path, model, json] {
             const Run run = read_run_any(*path);
@@ -144,7 +151,35 @@ const bool registered = register_command(Command{
                                          std::to_string(*line) + ", so sample row N is line N + " +
                                          std::to_string(*line - 1) + ")");
             }
-            const RunEstimates out = estimate_run(run, model->empty() ? std::nullopt : std::optional<std::string>(*model));
+            std::optional<std::string> network_model = model->empty() ? std::nullopt : std::optional<std::string>(*model);
+            std::optional<Run> corrected;
+            std::string model_note;
+            if (network_model) {
+                std::string error;
+                const auto j = io::read_bounded_json_file(*network_model, error);
+                if (!j) throw EmadiagError("--model " + *network_model + ": " + error);
+                if (discovery::is_discovery_model(*j)) {
+                    sim::EmaParams params = sim::EmaParams::datasheet();
+                    params.k_t_nm_per_a = run.constants.k_t_nm_per_a;
+                    params.j_kgm2 = run.constants.j_kgm2;
+                    params.tau = run.constants.tau;
+                    try {
+                        discovery::apply_model(*j, params);
+                        const discovery::ModelCorrection c = discovery::model_correction(params);
+                        corrected = discovery::remove_model_effects(run, c);
+                        model_note = "discovery model " + *network_model + " (sha256 " + db::sha256_file_hex(*network_model) +
+                                     "): removed from the run before estimation: " + c.text();
+                    } catch (const std::exception& e) {
+                        throw EmadiagError("--model " + *network_model + ": " + e.what());
+                    }
+                    network_model.reset();  // the network: a shipped model for the run's case
+                }
+            }
+            RunEstimates out = estimate_run(corrected ? *corrected : run, network_model);
+            if (corrected) {
+                out.model_files.insert(out.model_files.begin(), *model);
+                out.notes.insert(out.notes.begin(), model_note);
+            }
             if (*json) std::cout << to_json(*path, run, out).dump(2) << '\n';
             else print_text(std::cout, *path, run, out);
             return 0;

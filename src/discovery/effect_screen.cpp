@@ -3,7 +3,7 @@
 #pragma GCC diagnostic ignored "-Wuninitialized"
 #include "discovery/effect_screen.hpp"
 
-#include "core/emadiag_error.hpp"
+#include "discovery/screen_windows.hpp"
 
 #include <Eigen/Dense>
 
@@ -12,63 +12,22 @@
 #include <limits>
 
 namespace emadiag::discovery {
-namespace {
-
-/// A candidate column that is (numerically) inside the span of the base columns is skipped.
-constexpr double kMinResidualColumnFraction = 1e-8;
-
-std::string fmt(double v) {
-    char b[32];
-    std::snprintf(b, sizeof b, "%.3g", v);
-    return b;
-}
-
-}  // namespace
 
 ScreenResult screen_effects(const RunSignals& s, const ScreenInput& in) {
-    std::vector<std::size_t> rows;
-    for (std::size_t k = 0; k < s.size() && k < in.mask.size(); ++k) {
-        if (in.mask[k]) rows.push_back(k);
-    }
+    const WindowedBase wb = windowed_base(s, in);
+    const std::vector<std::size_t>& rows = wb.rows;
     const std::size_t n = rows.size();
-    if (n < kMinScreenSamples) {
-        throw EmadiagError("discovery: " + std::to_string(n) + " comparison samples (slipping in the run and the "
-                           "model); at least " + std::to_string(kMinScreenSamples) + " are needed");
-    }
-    // Windows of up to kScreenWindowSamples consecutive comparison samples; each row of the
-    // regression is a window SUM (least squares on window means weighted by n_i^2).
-    std::vector<std::vector<std::size_t>> windows;
-    for (std::size_t i = 0; i < n; ++i) {
-        if (windows.empty() || windows.back().size() == kScreenWindowSamples || rows[i] != windows.back().back() + 1) {
-            windows.emplace_back();
-        }
-        windows.back().push_back(rows[i]);
-    }
-    const auto ni = static_cast<Eigen::Index>(windows.size());
-    double weight_sum = 0;  // sum of n_i^2: RSS / weight_sum is a mean square of window means
-    for (const auto& w : windows) weight_sum += static_cast<double>(w.size() * w.size());
-    auto window_sums = [&](const std::vector<double>& full) {
-        Eigen::VectorXd v(ni);
-        for (Eigen::Index i = 0; i < ni; ++i) {
-            double sum = 0;
-            for (std::size_t k : windows[static_cast<std::size_t>(i)]) sum += full[k];
-            v(i) = sum;
-        }
-        return v;
-    };
+    const auto ni = static_cast<Eigen::Index>(wb.windows.size());
     const auto p = static_cast<Eigen::Index>(in.base_columns.size());
-    Eigen::MatrixXd x0(ni, p);
-    const Eigen::VectorXd y = window_sums(in.residual_nm);
-    for (Eigen::Index j = 0; j < p; ++j) x0.col(j) = window_sums(in.base_columns[static_cast<std::size_t>(j)]);
-    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(x0);
-    const Eigen::MatrixXd q = qr.householderQ() * Eigen::MatrixXd::Identity(ni, p);
-    const Eigen::VectorXd e0 = y - q * (q.transpose() * y);
-    const double rss0 = e0.squaredNorm();
+    const Eigen::MatrixXd& q = wb.q;
+    const Eigen::VectorXd& e0 = wb.e0;
+    const double rss0 = wb.rss0;
+    const double weight_sum = wb.weight_sum;
     const double dn = static_cast<double>(ni);
 
     ScreenResult out;
     out.samples = n;
-    out.windows = windows.size();
+    out.windows = wb.windows.size();
     out.base_rms_nm = std::sqrt(rss0 / weight_sum);
     for (EffectKind kind : candidate_kinds()) {
         const bool taken = std::find(in.exclude.begin(), in.exclude.end(), kind) != in.exclude.end();
@@ -81,7 +40,7 @@ ScreenResult screen_effects(const RunSignals& s, const ScreenInput& in) {
         const auto grid = shape_grid(kind, s);
         const std::size_t grid_size = std::max<std::size_t>(1, grid.size());
         for (const auto& shape : grid) {
-            Eigen::VectorXd x = window_sums(signature(s, shape));
+            Eigen::VectorXd x = wb.window_sums(signature(s, shape));
             const double sxx_raw = x.squaredNorm();
             x -= q * (q.transpose() * x);
             const double sxx = x.squaredNorm();
@@ -115,14 +74,14 @@ ScreenResult screen_effects(const RunSignals& s, const ScreenInput& in) {
         }
         best.sign_ok = best_sign_ok;
         if (!best.sign_ok) {
-            best.reason = "amplitude " + fmt(best.amplitude) + " has the unphysical sign";
+            best.reason = "amplitude " + fmt3(best.amplitude) + " has the unphysical sign";
         } else if (best.delta_bic <= kMinDeltaBic) {
-            best.reason = "delta BIC " + fmt(best.delta_bic) + " <= " + fmt(kMinDeltaBic);
+            best.reason = "delta BIC " + fmt3(best.delta_bic) + " <= " + fmt3(kMinDeltaBic);
         } else if (best.peak_torque_nm < kMinEffectPeakNm) {
-            best.reason = "peak torque " + fmt(best.peak_torque_nm) + " N m < " + fmt(kMinEffectPeakNm) + " N m";
+            best.reason = "peak torque " + fmt3(best.peak_torque_nm) + " N m < " + fmt3(kMinEffectPeakNm) + " N m";
         } else {
             best.accepted = true;
-            best.reason = "delta BIC " + fmt(best.delta_bic) + ", peak torque " + fmt(best.peak_torque_nm) + " N m";
+            best.reason = "delta BIC " + fmt3(best.delta_bic) + ", peak torque " + fmt3(best.peak_torque_nm) + " N m";
         }
         out.ranking.push_back(best);
     }

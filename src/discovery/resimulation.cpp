@@ -10,6 +10,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
+#include <mutex>
+#include <thread>
 
 namespace emadiag::discovery {
 namespace {
@@ -59,6 +62,35 @@ const ParamSpec& spec(const std::string& name) {
 }
 
 double rms(double sum_sq, std::size_t n) { return n ? std::sqrt(sum_sq / static_cast<double>(n)) : 0.0; }
+
+/// Calls f(i) for i in [0, n) on up to two threads (the Jacobian's columns are independent
+/// re-simulations; two cores is what a ramp laptop has). Each i writes only its own result, so the
+/// outcome does not depend on the thread count. The first exception is rethrown after the join.
+template <class F>
+void for_each_parallel(std::size_t n, F f) {
+    const unsigned cores = std::max(1u, std::min(2u, std::thread::hardware_concurrency()));
+    if (n < 2 || cores < 2) {
+        for (std::size_t i = 0; i < n; ++i) f(i);
+        return;
+    }
+    std::exception_ptr failure;
+    std::mutex failure_mutex;
+    auto run = [&](std::size_t first) {
+        for (std::size_t i = first; i < n; i += 2) {
+            try {
+                f(i);
+            } catch (...) {
+                const std::lock_guard<std::mutex> lock(failure_mutex);
+                if (!failure) failure = std::current_exception();
+                return;
+            }
+        }
+    };
+    std::thread other(run, 1);
+    run(0);
+    other.join();
+    if (failure) std::rethrow_exception(failure);
+}
 
 }  // namespace
 
@@ -190,8 +222,8 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
     }
     const auto m = static_cast<Eigen::Index>(windows.size());
     const auto np = static_cast<Eigen::Index>(names.size());
-    auto residual = [&](sim::EmaParams p) {
-        ++fr.simulations;
+    // Thread-safe: the simulation count is added by the callers.
+    auto residual_of = [&](sim::EmaParams p) {
         p.fsj_nm = std::max(fsj_base_nm, p.fdj_nm);
         const RunSignals sim_s = run_signals(resimulate(run, p));
         Eigen::VectorXd e(m);
@@ -204,6 +236,10 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
         }
         return e;
     };
+    auto residual = [&](const sim::EmaParams& p) {
+        ++fr.simulations;
+        return residual_of(p);
+    };
     fr.rows = windows.size();
     if (reference != nullptr) fr.cost_reference = residual(*reference).squaredNorm();
     sim::EmaParams p = start;
@@ -214,17 +250,26 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
     Eigen::MatrixXd jac(m, np);
     for (int it = 0; it < max_iterations; ++it) {
         fr.iterations = it + 1;
-        // Forward differences of the model's T_R (e = y - f, so df = -(e_step - e)).
+        // Forward differences of the model's T_R (e = y - f, so df = -(e_step - e)); the columns'
+        // re-simulations run side by side.
+        std::vector<sim::EmaParams> steps(static_cast<std::size_t>(np), p);
+        std::vector<double> actual(static_cast<std::size_t>(np));
         for (Eigen::Index j = 0; j < np; ++j) {
-            const std::string& name = names[static_cast<std::size_t>(j)];
+            const auto ju = static_cast<std::size_t>(j);
+            const std::string& name = names[ju];
             const ParamSpec& s = spec(name);
             const double v = get_parameter(p, name);
             double h = std::max(s.step_abs, kStepRel * std::abs(v));
             if (v + h > s.hi) h = -h;
-            sim::EmaParams q = p;
-            set_parameter(q, name, v + h);
-            const double actual = get_parameter(q, name) - v;
-            jac.col(j) = -(residual(q) - e) / actual;
+            set_parameter(steps[ju], name, v + h);
+            actual[ju] = get_parameter(steps[ju], name) - v;
+        }
+        std::vector<Eigen::VectorXd> stepped(static_cast<std::size_t>(np));
+        for_each_parallel(stepped.size(), [&](std::size_t j) { stepped[j] = residual_of(steps[j]); });
+        fr.simulations += static_cast<int>(np);
+        for (Eigen::Index j = 0; j < np; ++j) {
+            const auto ju = static_cast<std::size_t>(j);
+            jac.col(j) = -(stepped[ju] - e) / actual[ju];
         }
         const Eigen::MatrixXd jtj = jac.transpose() * jac;
         const Eigen::VectorXd jte = jac.transpose() * e;

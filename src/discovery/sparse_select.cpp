@@ -3,7 +3,7 @@
 #pragma GCC diagnostic ignored "-Wuninitialized"
 #include "discovery/sparse_select.hpp"
 
-#include "core/emadiag_error.hpp"
+#include "discovery/screen_windows.hpp"
 
 #include <Eigen/Dense>
 
@@ -14,14 +14,6 @@
 
 namespace emadiag::discovery {
 namespace {
-
-constexpr double kMinResidualColumnFraction = 1e-8;
-
-std::string fmt(double v) {
-    char b[32];
-    std::snprintf(b, sizeof b, "%.3g", v);
-    return b;
-}
 
 /// Residual of y after least squares on x (columns), over the given rows.
 Eigen::VectorXd residual_after(const Eigen::MatrixXd& x, const Eigen::VectorXd& y) {
@@ -45,41 +37,16 @@ Eigen::VectorXd rows_of(const Eigen::VectorXd& v, const std::vector<Eigen::Index
 
 GenericScreen screen_generated(const RunSignals& s, const ScreenInput& in, const std::vector<TermFamily>& lib,
                                std::uint64_t seed) {
-    std::vector<std::size_t> rows;
-    for (std::size_t k = 0; k < s.size() && k < in.mask.size(); ++k) {
-        if (in.mask[k]) rows.push_back(k);
-    }
-    if (rows.size() < kMinScreenSamples) {
-        throw EmadiagError("discovery: " + std::to_string(rows.size()) + " comparison samples; at least " +
-                           std::to_string(kMinScreenSamples) + " are needed");
-    }
-    std::vector<std::vector<std::size_t>> windows;
-    for (std::size_t k : rows) {
-        if (windows.empty() || windows.back().size() == kScreenWindowSamples || k != windows.back().back() + 1) {
-            windows.emplace_back();
-        }
-        windows.back().push_back(k);
-    }
+    const WindowedBase wb = windowed_base(s, in);
+    const std::vector<std::size_t>& rows = wb.rows;
+    const std::vector<std::vector<std::size_t>>& windows = wb.windows;
     const auto ni = static_cast<Eigen::Index>(windows.size());
-    double weight_sum = 0;
-    for (const auto& w : windows) weight_sum += static_cast<double>(w.size() * w.size());
-    auto window_sums = [&](const std::vector<double>& full) {
-        Eigen::VectorXd v(ni);
-        for (Eigen::Index i = 0; i < ni; ++i) {
-            double sum = 0;
-            for (std::size_t k : windows[static_cast<std::size_t>(i)]) sum += full[k];
-            v(i) = sum;
-        }
-        return v;
-    };
+    const double weight_sum = wb.weight_sum;
     const auto p = static_cast<Eigen::Index>(in.base_columns.size());
-    Eigen::MatrixXd x0(ni, p);
-    const Eigen::VectorXd y = window_sums(in.residual_nm);
-    for (Eigen::Index j = 0; j < p; ++j) x0.col(j) = window_sums(in.base_columns[static_cast<std::size_t>(j)]);
-    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(x0);
-    const Eigen::MatrixXd q = qr.householderQ() * Eigen::MatrixXd::Identity(ni, p);
-    const Eigen::VectorXd e0 = y - q * (q.transpose() * y);
-    const double rss0 = e0.squaredNorm();
+    const Eigen::MatrixXd& x0 = wb.x0;
+    const Eigen::VectorXd& y = wb.y;
+    const Eigen::VectorXd& e0 = wb.e0;
+    const double rss0 = wb.rss0;
     const double dn = static_cast<double>(ni);
 
     GenericScreen out;
@@ -102,10 +69,10 @@ GenericScreen screen_generated(const RunSignals& s, const ScreenInput& in, const
             std::vector<std::vector<double>> full;
             for (Eigen::Index j = 0; j < k; ++j) {
                 full.push_back(term_signature(s, shape[static_cast<std::size_t>(j)]));
-                x.col(j) = window_sums(full.back());
+                x.col(j) = wb.window_sums(full.back());
             }
             const double raw = x.squaredNorm();
-            Eigen::MatrixXd xr = x - q * (q.transpose() * x);
+            Eigen::MatrixXd xr = wb.project_out(x);
             if (!(xr.squaredNorm() > kMinResidualColumnFraction * raw) || raw == 0) continue;
             const Eigen::MatrixXd xtx = xr.transpose() * xr;
             const Eigen::VectorXd b = xtx.ldlt().solve(xr.transpose() * e0);
@@ -222,19 +189,19 @@ GenericScreen screen_generated(const RunSignals& s, const ScreenInput& in, const
     top.checked = true;
     for (auto& e : out.ranking) {
         if (e.delta_bic <= 0) {
-            e.reason = "delta BIC " + fmt(e.delta_bic) + " <= 0";
+            e.reason = "delta BIC " + fmt3(e.delta_bic) + " <= 0";
         } else if (e.peak_torque_nm < kMinEffectPeakNm) {
-            e.reason = "peak torque " + fmt(e.peak_torque_nm) + " N m < " + fmt(kMinEffectPeakNm) + " N m";
+            e.reason = "peak torque " + fmt3(e.peak_torque_nm) + " N m < " + fmt3(kMinEffectPeakNm) + " N m";
         } else if (!e.checked) {
             e.reason = "passes delta BIC; the best family is added first";
         } else if (e.cv_gain <= 0) {
-            e.reason = "block cross-validation: no gain on held-out time (" + fmt(e.cv_gain) + ")";
+            e.reason = "block cross-validation: no gain on held-out time (" + fmt3(e.cv_gain) + ")";
         } else if (e.stability < kMinStability) {
-            e.reason = "unstable: wins in " + fmt(100 * e.stability) + " % of resamples";
+            e.reason = "unstable: wins in " + fmt3(100 * e.stability) + " % of resamples";
         } else {
             e.accepted = true;
-            e.reason = "delta BIC " + fmt(e.delta_bic) + ", CV gain " + fmt(e.cv_gain) + ", stability " +
-                       fmt(e.stability) + ", peak " + fmt(e.peak_torque_nm) + " N m";
+            e.reason = "delta BIC " + fmt3(e.delta_bic) + ", CV gain " + fmt3(e.cv_gain) + ", stability " +
+                       fmt3(e.stability) + ", peak " + fmt3(e.peak_torque_nm) + " N m";
         }
     }
     return out;

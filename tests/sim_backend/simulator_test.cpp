@@ -73,6 +73,7 @@ private:
 
 /// Every instruction set this CPU supports (scalar, SSE4, AVX2, AVX-512 on x86-64), forced one at a
 /// time, gives the scalar path's samples bit for bit: same operations in the same order, no FMA.
+/// That holds for the batched path and for simulate(), whose scalar step is compiled per target too.
 TEST(Simulator, BatchedPathMatchesScalarPathBitForBitOnEverySupportedTarget) {
     const std::uint64_t seed = test_seed();
     std::cout << "seed " << seed << " (override with EMADIAG_TEST_SEED)\n";
@@ -102,6 +103,8 @@ TEST(Simulator, BatchedPathMatchesScalarPathBitForBitOnEverySupportedTarget) {
                 c.record_truth = true;
             }
         }
+        // The reference: the scalar path as the baseline build compiles it (EMADIAG_SIMD=scalar).
+        set_simd_target("scalar");
         std::vector<SimResult> scalar;
         for (const auto& c : configs) scalar.push_back(simulate(c));
         for (const std::string& target : targets) {
@@ -109,6 +112,16 @@ TEST(Simulator, BatchedPathMatchesScalarPathBitForBitOnEverySupportedTarget) {
             const SimdTarget used = simd_target();
             ASSERT_EQ(used.name, target);
             std::cout << "target " << used.name << ": " << used.lanes << " lanes x " << used.groups << " groups\n";
+            // simulate() runs the scalar step compiled for this target: the baseline's samples too.
+            for (std::size_t i = 0; i < 3; ++i) {
+                const SimResult one = simulate(configs[i]);
+                EXPECT_TRUE(same_samples(one.samples, scalar[i].samples))
+                    << "simulate() on target " << target << " case " << to_string(cs.lc) << " sequence "
+                    << to_string(cs.seq) << (cs.effects ? " with effects" : "") << " run " << i;
+                if (cs.effects) {
+                    EXPECT_EQ(one.energy.friction_work_j, scalar[i].energy.friction_work_j) << target;
+                }
+            }
             const auto batch = simulate_batch(configs, 2);
             ASSERT_EQ(batch.size(), configs.size());
             for (std::size_t i = 0; i < configs.size(); ++i) {

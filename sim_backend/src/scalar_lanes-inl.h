@@ -1,0 +1,13 @@
+// The scalar path's lane types (W = 1: one double, one bool) and their operations, for
+// step_kernel-inl.h. No include guard: included inside each namespace that compiles the step at
+// W = 1, after that namespace's `template <int W> struct Vec` (step_kernel.hpp for the baseline
+// copy, batch_kernels.cpp once per Highway target).
+template <>
+struct Vec<1> {
+    using D = double;
+    using M = bool;
+};
+inline double sel(bool m, double a, double b) { return m ? a : b; }
+inline bool vnot(bool m) { return !m; }
+inline double vabs(double a) { return std::fabs(a); }
+inline void to_array(double v, double* out) { out[0] = v; }
