@@ -33,6 +33,12 @@ sim --db a.db --tail N1EM --position LH-ELEV --sessions 4 --serial NEW-1 --start
 sim --db a.db --tail N2EM --position RH-ELEV --sessions 5 --days-between 20 --fsj-rate-per-100d 0.02
 sim --db b.db --tail N1EM --position RH-ELEV --sessions 6 --cycles-per-day 4 --seed 7
 sim --db c.db --tail N3EM --position LH-AIL --sessions 20 --days-between 5 --seed 3
+# Discovery findings of N1EM (as `emadiag discover --tail` stores them): one open, one closed by a later entry.
+sqlite3 a.db "INSERT INTO discovery_findings(tail_number, position, actuator_serial, found_utc, summary, model_json, status, tool_version, content_sha256)
+  VALUES ('N1EM', 'LH-ELEV', 'NEW-1', '2026-09-01T10:00:00Z', 'Stribeck term: +0.012 N m below 0.5 rad/s; RMS error 0.031 -> 0.012 A', '{}', 'open', 'test', lower(hex(randomblob(32)))),
+         ('N1EM', 'LH-ELEV', 'NEW-1', '2026-09-02T10:00:00Z', 'backlash 0.4 mrad', '{}', 'open', 'test', lower(hex(randomblob(32))));
+  INSERT INTO discovery_findings(tail_number, position, actuator_serial, found_utc, summary, model_json, status, amends_finding_id, tool_version, content_sha256)
+  VALUES ('N1EM', 'LH-ELEV', 'NEW-1', '2026-09-03T10:00:00Z', 'backlash 0.4 mrad: closed, shim replaced', '{}', 'closed', 2, 'test', lower(hex(randomblob(32))))"
 count() { sqlite3 "$1" "SELECT count(*) FROM test_sessions"; }
 
 # ---- 1. a password in the URI is refused and never printed ----
@@ -75,6 +81,8 @@ for s in a b; do
     pass "station $s: every session on the server with all its findings, runs, samples and raw-log bytes ($(station_detail $s.db | awk '{f+=$2; r+=$3; x+=$4; b+=$5} END {print NR" sessions, "f" findings, "r" runs, "x" samples, "b" raw-log bytes"}'))"
   else fail "station $s: server differs: $(diff <(station_detail $s.db) <(server_detail $s.db) | head -5)"; fi
 done
+nd=$(admin -c "SELECT count(*) FROM discovery_findings d JOIN discovery_findings o ON d.amends_finding_id = o.finding_id WHERE o.summary = 'backlash 0.4 mrad'")
+[ "$nd" = 1 ] && pass "discovery findings synced with the closing entry pointing to the one it closes" || fail "discovery findings: $nd"
 ni=$(admin -c "SELECT count(*) FROM installations WHERE tail_number = 'N1EM'")
 [ "$ni" = 3 ] && pass "installations synced: $ni on N1EM (LH-ELEV first serial, LH-ELEV change to NEW-1, RH-ELEV from station b)" || fail "installations: $ni"
 
@@ -137,9 +145,9 @@ check_refused "UPDATE of its own session" "permission denied" "$(st station_b "U
 check_refused "UPDATE of the fleet summary" "permission denied" "$(st station_b "UPDATE series_stats SET n = 0")"
 check_refused "INSERT of a finding into station_a's session" "violates foreign key" \
   "$(st station_b "INSERT INTO findings(session_id, parameter, estimator, limit_kind, status) VALUES ($a_sid, 'X', 'physics', 'none', 'WITHIN')")"
-check_refused "INSERT of a finding into station_a's session posing as station_a" "cannot insert a row of station role station_a" \
+check_refused "INSERT of a finding into station_a's session posing as station_a" "permission denied" \
   "$(st station_b "INSERT INTO findings(session_id, station_role, parameter, estimator, limit_kind, status) VALUES ($a_sid, 'station_a', 'X', 'physics', 'none', 'WITHIN')")"
-check_refused "INSERT of a session under station_a's station identity" "registered by another role" \
+check_refused "INSERT of a session under station_a's station identity" "violates foreign key constraint \"test_sessions_station_uuid_station_role_fkey\"" \
   "$(st station_b "INSERT INTO test_sessions(session_uuid, station_uuid, station_session_id, tail_number, phase, started_utc, verdict, prev_sha256, content_sha256) SELECT gen_random_uuid(), station_uuid, 999999, 'N1EM', 'pre-flight', '2027-01-01T00:00:00Z', 'SERVICEABLE', '', repeat('0', 64) FROM stations WHERE station_role = 'station_a'")"
 after=$(admin -c "SELECT md5(string_agg(t::text, '' ORDER BY session_id)) FROM test_sessions t")
 reads=$(st station_b "SELECT count(*) FROM test_sessions")

@@ -3,6 +3,8 @@
 # directory, as an unprivileged user, on a Unix socket only; runs the fleet-server tests
 # (pg_tests.sh) against it; stops it and removes the directory afterwards, also on failure.
 #   scripts/pg/run_pg_tests.sh [EMADIAG_BINARY]     (default build/src/emadiag)
+#   scripts/pg/run_pg_tests.sh EMADIAG_BINARY --run CMD ARGS...   (CMD instead of the tests, e.g. the
+#       benchmark: scripts/pg/run_pg_bench.sh; it gets PGSOCK, PGWORK and the admin role fleet_admin)
 # Run as root (CI): the server runs as the system user 'postgres' (made by the package) or, when
 # missing, as 'emadiag-pg' (created here). Run as another user: the server runs as that user.
 # Exit status: that of the tests; never skipped (no server binaries is a failure).
@@ -10,6 +12,9 @@ set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
 emadiag="$(readlink -f "${1:-$root/build/src/emadiag}")"
+shift || true
+run_cmd=()
+if [ "${1:-}" = "--run" ]; then shift; run_cmd=("$@"); fi
 [ -x "$emadiag" ] || { echo "run_pg_tests: no emadiag binary at $emadiag (build it first)" >&2; exit 1; }
 pgbin="$(ls -d /usr/lib/postgresql/*/bin 2>/dev/null | sort -V | tail -1)"
 [ -n "$pgbin" ] && [ -x "$pgbin/initdb" ] && [ -x "$pgbin/pg_ctl" ] ||
@@ -58,4 +63,4 @@ touch "$work/server.log"; [ "$(id -u)" -eq 0 ] && chown "$server_user" "$work/se
 echo "run_pg_tests: PostgreSQL $("$pgbin/postgres" --version | awk '{print $3}') as $server_user on socket $work/sock"
 
 export EMADIAG="$emadiag" PGSOCK="$work/sock" PGWORK="$work"
-bash "$here/pg_tests.sh"
+if [ ${#run_cmd[@]} -gt 0 ]; then "${run_cmd[@]}"; else bash "$here/pg_tests.sh"; fi
