@@ -239,7 +239,8 @@ private:
                       {p, ad.first, ad.second});
             const auto r = pg_.query("SELECT ata_reference FROM positions WHERE position = $1", {p});
             if (r.empty() || r[0][0] != ad.first)
-                throw DbError("position " + p + " is recorded on " + server_ + " with ATA reference " + r.at(0).at(0).value_or("?") +
+                throw DbError("position " + p + " is recorded on " + server_ + " with ATA reference " +
+                                  (r.empty() ? std::string("?") : r[0][0].value_or("?")) +
                                   ", in " + db_.path() + " with " + ad.first + ": a position keeps its ATA reference",
                               DbErrorKind::Invalid);
         }
@@ -309,143 +310,150 @@ private:
             }
         }
 
-        pg_.exec("BEGIN");
-        register_places(tails, positions);
-        const auto sids = reserve("test_sessions", "session_id", ids.size());
-        const auto rids = reserve("runs", "run_id", runs.size());
-        std::unordered_map<std::int64_t, std::int64_t> batch_ids, run_ids;
-        for (std::size_t i = 0; i < ids.size(); ++i) batch_ids[ids[i]] = sids[i];
-        for (std::size_t i = 0; i < runs.size(); ++i) run_ids[runs[i].run_id] = rids[i];
-        const auto fleet = [&](std::int64_t local) {
-            const auto it = batch_ids.find(local);
-            return it != batch_ids.end() ? it->second : fleet_session_of(local);
-        };
-        pg_.copy_in("test_sessions (session_id, session_uuid, station_uuid, station_session_id, tail_number, position, actuator_serial, "
-                    "phase, started_utc, cycles, hours_h, operator_id, technician_name, technician_certificate, work_performed, source, "
-                    "tool_version, verdict, verdict_note, limits_json, limits_sha256, correction_reason, prev_sha256, content_sha256, "
-                    "amends_session_id)",
-                    [&](const auto& put) {
-                        for (std::size_t i = 0; i < ids.size(); ++i) {
-                            const LightSession& l = light.at(ids[i]);
-                            put(std::to_string(sids[i]) + '\t' + session_uuid(res_.station_uuid, ids[i]) + '\t' + res_.station_uuid + '\t' +
-                                std::to_string(ids[i]) + '\t' + session_lines[i] + '\t' + (l.amends ? std::to_string(fleet(*l.amends)) : "\\N") +
-                                '\n');
-                        }
-                    });
+        std::vector<std::int64_t> sids;
         std::int64_t samples = 0, raw_bytes = 0;
-        if (!runs.empty()) {
-            pg_.copy_in("runs (run_id, session_id, tail_number, actuator_serial, started_utc, source, load_case, sequence, k_t_nm_per_a, j_kgm2, "
-                        "tau, sample_period_s, valid, status_note, meta_json, raw_log_format, raw_log_bytes)",
+        try {
+            pg_.exec("BEGIN");
+            register_places(tails, positions);
+            sids = reserve("test_sessions", "session_id", ids.size());
+            const auto rids = reserve("runs", "run_id", runs.size());
+            std::unordered_map<std::int64_t, std::int64_t> batch_ids, run_ids;
+            for (std::size_t i = 0; i < ids.size(); ++i) batch_ids[ids[i]] = sids[i];
+            for (std::size_t i = 0; i < runs.size(); ++i) run_ids[runs[i].run_id] = rids[i];
+            const auto fleet = [&](std::int64_t local) {
+                const auto it = batch_ids.find(local);
+                return it != batch_ids.end() ? it->second : fleet_session_of(local);
+            };
+            pg_.copy_in("test_sessions (session_id, session_uuid, station_uuid, station_session_id, tail_number, position, actuator_serial, "
+                        "phase, started_utc, cycles, hours_h, operator_id, technician_name, technician_certificate, work_performed, source, "
+                        "tool_version, verdict, verdict_note, limits_json, limits_sha256, correction_reason, prev_sha256, content_sha256, "
+                        "amends_session_id)",
                         [&](const auto& put) {
-                            for (const auto& r : runs) put(std::to_string(run_ids.at(r.run_id)) + '\t' + std::to_string(batch_ids.at(r.session_id)) + '\t' + r.line + '\n');
+                            for (std::size_t i = 0; i < ids.size(); ++i) {
+                                const LightSession& l = light.at(ids[i]);
+                                put(std::to_string(sids[i]) + '\t' + session_uuid(res_.station_uuid, ids[i]) + '\t' + res_.station_uuid + '\t' +
+                                    std::to_string(ids[i]) + '\t' + session_lines[i] + '\t' + (l.amends ? std::to_string(fleet(*l.amends)) : "\\N") +
+                                    '\n');
+                            }
                         });
-            pg_.copy_in("estimates (run_id, estimator, parameter, value, std_error, identifiable, method, note)", [&](const auto& put) {
-                Statement st(db_, "SELECT e.run_id, e.estimator, e.parameter, e.value, e.std_error, e.identifiable, e.method, e.note FROM estimates e "
-                                  "JOIN runs r ON r.run_id = e.run_id WHERE r.session_id BETWEEN ? AND ?");
+            if (!runs.empty()) {
+                pg_.copy_in("runs (run_id, session_id, tail_number, actuator_serial, started_utc, source, load_case, sequence, k_t_nm_per_a, j_kgm2, "
+                            "tau, sample_period_s, valid, status_note, meta_json, raw_log_format, raw_log_bytes)",
+                            [&](const auto& put) {
+                                for (const auto& r : runs) put(std::to_string(run_ids.at(r.run_id)) + '\t' + std::to_string(batch_ids.at(r.session_id)) + '\t' + r.line + '\n');
+                            });
+                pg_.copy_in("estimates (run_id, estimator, parameter, value, std_error, identifiable, method, note)", [&](const auto& put) {
+                    Statement st(db_, "SELECT e.run_id, e.estimator, e.parameter, e.value, e.std_error, e.identifiable, e.method, e.note FROM estimates e "
+                                      "JOIN runs r ON r.run_id = e.run_id WHERE r.session_id BETWEEN ? AND ?");
+                    st.bind(1, lo).bind(2, hi);
+                    while (st.step())
+                        put(std::to_string(run_ids.at(st.column_int(0))) + '\t' + f(st.column_text(1)) + '\t' + f(st.column_text(2)) + '\t' +
+                            opt_d(col_opt_d(st, 3)) + '\t' + d2s(st.column_double(4)) + '\t' + (st.column_int(5) != 0 ? "t" : "f") + '\t' +
+                            f(st.column_text(6)) + '\t' + f(st.column_text(7)) + '\n');
+                });
+                // Samples streamed from the station file: never all in memory.
+                pg_.copy_in("samples (run_id, sample_index, t_s, current_a, speed_rad_s, theta_m_rad, hinge_moment_nm, command_deg)",
+                            [&](const auto& put) {
+                                Statement st(db_, "SELECT x.run_id, x.sample_index, x.t_s, x.current_a, x.speed_rad_s, x.theta_m_rad, "
+                                                  "x.hinge_moment_nm, x.command_deg FROM samples x JOIN runs r ON r.run_id = x.run_id "
+                                                  "WHERE r.session_id BETWEEN ? AND ?");
+                                st.bind(1, lo).bind(2, hi);
+                                std::string line;
+                                while (st.step()) {
+                                    line = std::to_string(run_ids.at(st.column_int(0))) + '\t' + std::to_string(st.column_int(1));
+                                    for (int c = 2; c < 8; ++c) line += '\t' + d2s(st.column_double(c));
+                                    line += '\n';
+                                    put(line);
+                                    ++samples;
+                                }
+                            });
+                // Raw logs streamed in chunks straight from the SQLite blob.
+                pg_.copy_in("raw_log_chunks (run_id, chunk_index, content)", [&](const auto& put) {
+                    std::string chunk, line;
+                    static const char* hex = "0123456789abcdef";
+                    for (const auto& r : runs) {
+                        if (r.raw_bytes == 0) continue;
+                        sqlite3_blob* blob = nullptr;
+                        if (sqlite3_blob_open(db_.handle(), "main", "raw_logs", "content", r.run_id, 0, &blob) != SQLITE_OK)
+                            throw DbError("cannot read the raw log of run " + std::to_string(r.run_id) + ": " + db_.error_text());
+                        const int total = sqlite3_blob_bytes(blob);
+                        int chunk_index = 0;
+                        for (int at = 0; at < total; at += static_cast<int>(kRawChunkBytes), ++chunk_index) {
+                            const int n = std::min(total - at, static_cast<int>(kRawChunkBytes));
+                            chunk.resize(static_cast<std::size_t>(n));
+                            if (sqlite3_blob_read(blob, chunk.data(), n, at) != SQLITE_OK) {
+                                sqlite3_blob_close(blob);
+                                throw DbError("cannot read the raw log of run " + std::to_string(r.run_id) + ": " + db_.error_text());
+                            }
+                            line = std::to_string(run_ids.at(r.run_id)) + '\t' + std::to_string(chunk_index) + "\t\\\\x";
+                            line.reserve(line.size() + 2 * chunk.size() + 1);
+                            for (unsigned char c : chunk) {
+                                line += hex[c >> 4];
+                                line += hex[c & 15];
+                            }
+                            line += '\n';
+                            put(line);
+                        }
+                        sqlite3_blob_close(blob);
+                        raw_bytes += total;
+                    }
+                });
+            }
+            pg_.copy_in("findings (session_id, parameter, estimator, value, std_error, limit_value, limit_kind, status, note)", [&](const auto& put) {
+                for (const auto id : ids)
+                    for (const auto& x : light.at(id).findings)
+                        put(std::to_string(batch_ids.at(id)) + '\t' + f(x.parameter) + '\t' + f(x.estimator) + '\t' + opt_d(x.value) + '\t' +
+                            opt_d(x.std_error) + '\t' + opt_d(x.limit_value) + '\t' + f(x.limit_kind) + '\t' + f(x.status) + '\t' + f(x.note) + '\n');
+            });
+            pg_.copy_in("session_artifacts (session_id, role, name, sha256)", [&](const auto& put) {
+                Statement st(db_, "SELECT session_id, role, name, sha256 FROM session_artifacts WHERE session_id BETWEEN ? AND ?");
                 st.bind(1, lo).bind(2, hi);
                 while (st.step())
-                    put(std::to_string(run_ids.at(st.column_int(0))) + '\t' + f(st.column_text(1)) + '\t' + f(st.column_text(2)) + '\t' +
-                        opt_d(col_opt_d(st, 3)) + '\t' + d2s(st.column_double(4)) + '\t' + (st.column_int(5) != 0 ? "t" : "f") + '\t' +
-                        f(st.column_text(6)) + '\t' + f(st.column_text(7)) + '\n');
+                    put(std::to_string(batch_ids.at(st.column_int(0))) + '\t' + f(st.column_text(1)) + '\t' + f(st.column_text(2)) + '\t' +
+                        f(st.column_text(3)) + '\n');
             });
-            // Samples streamed from the station file: never all in memory.
-            pg_.copy_in("samples (run_id, sample_index, t_s, current_a, speed_rad_s, theta_m_rad, hinge_moment_nm, command_deg)",
+            pg_.copy_in("installations (tail_number, position, from_serial, to_serial, detected_utc, cycles, hours_h, session_id)", [&](const auto& put) {
+                Statement st(db_, "SELECT tail_number, position, from_serial, to_serial, detected_utc, cycles, hours_h, session_id FROM installations "
+                                  "WHERE session_id BETWEEN ? AND ? ORDER BY installation_id");
+                st.bind(1, lo).bind(2, hi);
+                while (st.step())
+                    put(f(st.column_text(0)) + '\t' + f(st.column_text(1)) + '\t' + f(st.column_text(2)) + '\t' + f(st.column_text(3)) + '\t' +
+                        f(st.column_text(4)) + '\t' + opt_i(col_opt_i(st, 5)) + '\t' + opt_d(col_opt_d(st, 6)) + '\t' +
+                        std::to_string(batch_ids.at(st.column_int(7))) + '\n');
+            });
+            // The summary terms, in the order the station applied them (add_to_summaries): per session, the
+            // amended session's measurements out (-1), then the session's own in (+1).
+            pg_.copy_in("session_measurements (session_id, ordinal, sign, of_session_id, tail_number, position, actuator_serial, parameter, days, "
+                        "w, wy, wyy, cycles, value, std_error, limit_kind, limit_value)",
                         [&](const auto& put) {
-                            Statement st(db_, "SELECT x.run_id, x.sample_index, x.t_s, x.current_a, x.speed_rad_s, x.theta_m_rad, "
-                                              "x.hinge_moment_nm, x.command_deg FROM samples x JOIN runs r ON r.run_id = x.run_id "
-                                              "WHERE r.session_id BETWEEN ? AND ?");
-                            st.bind(1, lo).bind(2, hi);
-                            std::string line;
-                            while (st.step()) {
-                                line = std::to_string(run_ids.at(st.column_int(0))) + '\t' + std::to_string(st.column_int(1));
-                                for (int c = 2; c < 8; ++c) line += '\t' + d2s(st.column_double(c));
-                                line += '\n';
-                                put(line);
-                                ++samples;
+                            for (const auto id : ids) {
+                                const LightSession& l = light.at(id);
+                                int ordinal = 0;
+                                const auto emit = [&](const LightSession& s, int sign) {
+                                    const double days = utc_days(s.started_utc);
+                                    for (const auto& m : session_measurements(s.findings)) {
+                                        const double w = sign / (m.std_error * m.std_error);
+                                        put(std::to_string(batch_ids.at(id)) + '\t' + std::to_string(ordinal++) + '\t' + std::to_string(sign) + '\t' +
+                                            std::to_string(fleet(s.id)) + '\t' + f(s.tail) + '\t' + f(s.position.value_or("")) + '\t' + f(s.serial) +
+                                            '\t' + f(m.parameter) + '\t' + d2s(days) + '\t' + d2s(w) + '\t' + d2s(w * m.value) + '\t' +
+                                            d2s(w * m.value * m.value) + '\t' +
+                                            (s.cycles ? d2s(static_cast<double>(*s.cycles)) : std::string("\\N")) + '\t' + d2s(m.value) + '\t' +
+                                            d2s(m.std_error) + '\t' + f(m.limit_kind) + '\t' + opt_d(m.limit_value) + '\n');
+                                    }
+                                };
+                                if (l.amends) {
+                                    const auto it = light.find(*l.amends);
+                                    emit(it != light.end() ? it->second : load_light(db_, *l.amends), -1);
+                                }
+                                emit(l, +1);
                             }
                         });
-            // Raw logs streamed in chunks straight from the SQLite blob.
-            pg_.copy_in("raw_log_chunks (run_id, chunk_index, content)", [&](const auto& put) {
-                std::string chunk, line;
-                static const char* hex = "0123456789abcdef";
-                for (const auto& r : runs) {
-                    if (r.raw_bytes == 0) continue;
-                    sqlite3_blob* blob = nullptr;
-                    if (sqlite3_blob_open(db_.handle(), "main", "raw_logs", "content", r.run_id, 0, &blob) != SQLITE_OK)
-                        throw DbError("cannot read the raw log of run " + std::to_string(r.run_id) + ": " + db_.error_text());
-                    const int total = sqlite3_blob_bytes(blob);
-                    int chunk_index = 0;
-                    for (int at = 0; at < total; at += static_cast<int>(kRawChunkBytes), ++chunk_index) {
-                        const int n = std::min(total - at, static_cast<int>(kRawChunkBytes));
-                        chunk.resize(static_cast<std::size_t>(n));
-                        if (sqlite3_blob_read(blob, chunk.data(), n, at) != SQLITE_OK) {
-                            sqlite3_blob_close(blob);
-                            throw DbError("cannot read the raw log of run " + std::to_string(r.run_id) + ": " + db_.error_text());
-                        }
-                        line = std::to_string(run_ids.at(r.run_id)) + '\t' + std::to_string(chunk_index) + "\t\\\\x";
-                        line.reserve(line.size() + 2 * chunk.size() + 1);
-                        for (unsigned char c : chunk) {
-                            line += hex[c >> 4];
-                            line += hex[c & 15];
-                        }
-                        line += '\n';
-                        put(line);
-                    }
-                    sqlite3_blob_close(blob);
-                    raw_bytes += total;
-                }
-            });
+            pg_.exec("COMMIT");
+        } catch (const DbError& e) {
+            std::string m = e.what();
+            if (m.rfind("[maintenance_db] ", 0) == 0) m = m.substr(17);
+            throw DbError("sessions " + std::to_string(lo) + ".." + std::to_string(hi) + " of " + db_.path() + ": " + m, e.kind());
         }
-        pg_.copy_in("findings (session_id, parameter, estimator, value, std_error, limit_value, limit_kind, status, note)", [&](const auto& put) {
-            for (const auto id : ids)
-                for (const auto& x : light.at(id).findings)
-                    put(std::to_string(batch_ids.at(id)) + '\t' + f(x.parameter) + '\t' + f(x.estimator) + '\t' + opt_d(x.value) + '\t' +
-                        opt_d(x.std_error) + '\t' + opt_d(x.limit_value) + '\t' + f(x.limit_kind) + '\t' + f(x.status) + '\t' + f(x.note) + '\n');
-        });
-        pg_.copy_in("session_artifacts (session_id, role, name, sha256)", [&](const auto& put) {
-            Statement st(db_, "SELECT session_id, role, name, sha256 FROM session_artifacts WHERE session_id BETWEEN ? AND ?");
-            st.bind(1, lo).bind(2, hi);
-            while (st.step())
-                put(std::to_string(batch_ids.at(st.column_int(0))) + '\t' + f(st.column_text(1)) + '\t' + f(st.column_text(2)) + '\t' +
-                    f(st.column_text(3)) + '\n');
-        });
-        pg_.copy_in("installations (tail_number, position, from_serial, to_serial, detected_utc, cycles, hours_h, session_id)", [&](const auto& put) {
-            Statement st(db_, "SELECT tail_number, position, from_serial, to_serial, detected_utc, cycles, hours_h, session_id FROM installations "
-                              "WHERE session_id BETWEEN ? AND ? ORDER BY installation_id");
-            st.bind(1, lo).bind(2, hi);
-            while (st.step())
-                put(f(st.column_text(0)) + '\t' + f(st.column_text(1)) + '\t' + f(st.column_text(2)) + '\t' + f(st.column_text(3)) + '\t' +
-                    f(st.column_text(4)) + '\t' + opt_i(col_opt_i(st, 5)) + '\t' + opt_d(col_opt_d(st, 6)) + '\t' +
-                    std::to_string(batch_ids.at(st.column_int(7))) + '\n');
-        });
-        // The summary terms, in the order the station applied them (add_to_summaries): per session, the
-        // amended session's measurements out (-1), then the session's own in (+1).
-        pg_.copy_in("session_measurements (session_id, ordinal, sign, of_session_id, tail_number, position, actuator_serial, parameter, days, "
-                    "w, wy, wyy, cycles, value, std_error, limit_kind, limit_value)",
-                    [&](const auto& put) {
-                        for (const auto id : ids) {
-                            const LightSession& l = light.at(id);
-                            int ordinal = 0;
-                            const auto emit = [&](const LightSession& s, int sign) {
-                                const double days = utc_days(s.started_utc);
-                                for (const auto& m : session_measurements(s.findings)) {
-                                    const double w = sign / (m.std_error * m.std_error);
-                                    put(std::to_string(batch_ids.at(id)) + '\t' + std::to_string(ordinal++) + '\t' + std::to_string(sign) + '\t' +
-                                        std::to_string(fleet(s.id)) + '\t' + f(s.tail) + '\t' + f(s.position.value_or("")) + '\t' + f(s.serial) +
-                                        '\t' + f(m.parameter) + '\t' + d2s(days) + '\t' + d2s(w) + '\t' + d2s(w * m.value) + '\t' +
-                                        d2s(w * m.value * m.value) + '\t' +
-                                        (s.cycles ? d2s(static_cast<double>(*s.cycles)) : std::string("\\N")) + '\t' + d2s(m.value) + '\t' +
-                                        d2s(m.std_error) + '\t' + f(m.limit_kind) + '\t' + opt_d(m.limit_value) + '\n');
-                                }
-                            };
-                            if (l.amends) {
-                                const auto it = light.find(*l.amends);
-                                emit(it != light.end() ? it->second : load_light(db_, *l.amends), -1);
-                            }
-                            emit(l, +1);
-                        }
-                    });
-        pg_.exec("COMMIT");
         // Only now is the batch on the server: record it on the station.
         {
             Transaction tx(db_);
