@@ -117,10 +117,17 @@ std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string&
         index[out.back().session_id] = out.size() - 1;
     }
     if (out.empty()) return out;
+    // The rows of these sessions by their ids (index scans on each table's key), not by a join on the
+    // condition: the planner's join over the whole fleet's findings is what a report cannot afford.
+    std::string id_array = "{";
+    for (std::size_t i = 0; i < out.size(); ++i) {
+        if (i > 0) id_array += ',';
+        id_array += std::to_string(out[i].session_id);
+    }
+    id_array += "}";
     for (const auto& r : pg_.query("SELECT f.session_id, f.parameter, f.estimator, f.value, f.std_error, f.limit_value, f.limit_kind, f.status, "
-                                   "f.note FROM test_sessions s JOIN findings f ON f.session_id = s.session_id WHERE " + where +
-                                       " ORDER BY f.session_id, f.parameter, f.estimator",
-                                   {value})) {
+                                   "f.note FROM findings f WHERE f.session_id = ANY($1::bigint[]) ORDER BY f.session_id, f.parameter, f.estimator",
+                                   {id_array})) {
         StoredFinding f;
         f.parameter = text(r, 1);
         f.estimator = text(r, 2);
@@ -132,16 +139,16 @@ std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string&
         f.note = text(r, 8);
         out[index.at(int_of(r, 0))].findings.push_back(std::move(f));
     }
-    for (const auto& r : pg_.query("SELECT a.session_id, a.role, a.name, a.sha256 FROM test_sessions s JOIN session_artifacts a ON "
-                                   "a.session_id = s.session_id WHERE " + where + " ORDER BY a.session_id, a.role, a.name",
-                                   {value}))
+    for (const auto& r : pg_.query("SELECT a.session_id, a.role, a.name, a.sha256 FROM session_artifacts a WHERE a.session_id = ANY($1::bigint[]) "
+                                   "ORDER BY a.session_id, a.role, a.name",
+                                   {id_array}))
         out[index.at(int_of(r, 0))].artifacts.push_back({text(r, 1), text(r, 2), text(r, 3)});
     std::vector<StoredRun> runs;
     std::unordered_map<std::int64_t, std::size_t> run_index;
     for (const auto& r : pg_.query("SELECT r.run_id, r.tail_number, r.actuator_serial, r.started_utc, r.source, r.load_case, r.sequence, "
                                    "r.k_t_nm_per_a, r.j_kgm2, r.tau, r.sample_period_s, r.valid, r.status_note, r.meta_json, r.session_id "
-                                   "FROM runs r JOIN test_sessions s ON r.session_id = s.session_id WHERE " + where + " ORDER BY r.run_id",
-                                   {value})) {
+                                   "FROM runs r WHERE r.session_id = ANY($1::bigint[]) ORDER BY r.run_id",
+                                   {id_array})) {
         StoredRun run;
         run.run_id = int_of(r, 0);
         run.tail_number = text(r, 1);
@@ -162,10 +169,15 @@ std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string&
         run_index[runs.back().run_id] = runs.size() - 1;
     }
     if (!runs.empty()) {
+        std::string run_array = "{";
+        for (std::size_t i = 0; i < runs.size(); ++i) {
+            if (i > 0) run_array += ',';
+            run_array += std::to_string(runs[i].run_id);
+        }
+        run_array += "}";
         for (const auto& r : pg_.query("SELECT e.run_id, e.estimator, e.parameter, e.value, e.std_error, e.identifiable, e.method, e.note "
-                                       "FROM estimates e JOIN runs r ON e.run_id = r.run_id JOIN test_sessions s ON r.session_id = "
-                                       "s.session_id WHERE " + where + " ORDER BY e.run_id, e.estimator, e.parameter",
-                                       {value})) {
+                                       "FROM estimates e WHERE e.run_id = ANY($1::bigint[]) ORDER BY e.run_id, e.estimator, e.parameter",
+                                       {run_array})) {
             StoredEstimate e;
             e.estimator = text(r, 1);
             e.parameter = text(r, 2);
