@@ -11,6 +11,7 @@ PACKAGES=(
   user-mode-linux kmod iproute2 can-utils
   chromium fonts-dejavu-core python3
   clang libclang-rt-14-dev  # libFuzzer targets (fuzz/, scripts/fuzz/run_fuzz.sh)
+  libpq-dev postgresql postgresql-client  # fleet server: libpq for sync/--db postgresql://, a real server in scripts/pg/run_pg_tests.sh
 )
 
 missing=()

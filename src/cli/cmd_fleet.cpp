@@ -4,6 +4,7 @@
 // last verdict) with the parameter that drives it. Read from the summary tables, so it takes about
 // the same time for a year of one aircraft as for a fleet's.
 #include "cli/command.hpp"
+#include "cli/db_source.hpp"
 #include "cli/output_file.hpp"
 
 #include "prognostics/fleet_view.hpp"
@@ -95,7 +96,9 @@ const bool registered = register_command(Command{
     "fleet", "Fleet view: every tail and position ranked by urgency (RUL lower bound, then status) with the parameter that drives it",
     [](CLI::App& sub) -> std::function<int()> {
         auto o = std::make_shared<FleetCliOptions>();
-        sub.add_option("--db", o->db, "Maintenance database (SQLite)")->capture_default_str()->check(CLI::ExistingFile);
+        sub.add_option("--db", o->db, "Maintenance database: SQLite file, or a fleet server postgresql://... (docs/fleet-server.md)")
+            ->capture_default_str()
+            ->check(sqlite_file_or_fleet_uri());
         sub.add_option("--format", o->format, "text, json or csv")->capture_default_str()->check(CLI::IsMember({"text", "json", "csv"}));
         sub.add_option("--out", o->out, "Write to this file (whole, or not at all) instead of stdout");
         sub.add_option("--draws", o->fleet.rul.draws, "Monte Carlo draws per RUL interval")->capture_default_str();
@@ -103,8 +106,8 @@ const bool registered = register_command(Command{
         sub.add_option("--horizon-days", o->fleet.rul.horizon_days, "Crossing horizon, days")->capture_default_str();
         sub.add_option("--horizon-cycles", o->fleet.horizon_cycles, "Crossing horizon, flight cycles")->capture_default_str();
         return [o] {
-            db::Database database(o->db);
-            const auto rows = pg::build_fleet_view(database, o->fleet);
+            db::OpenedSource database = db::open_record_source(o->db);
+            const auto rows = pg::build_fleet_view(*database.source, o->fleet);
             write_output(o->out, o->format == "json"  ? pg::to_json(rows, o->fleet).dump(2) + "\n"
                                  : o->format == "csv" ? csv_fleet(rows)
                                                       : text_fleet(rows, o->fleet));

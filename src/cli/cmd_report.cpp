@@ -7,6 +7,7 @@
 // calendar report, kept as it was.) HTML is written by the rendering module (src/report): see
 // kHtmlHook below.
 #include "cli/command.hpp"
+#include "cli/db_source.hpp"
 #include "cli/output_file.hpp"
 
 #include "core/emadiag_error.hpp"
@@ -165,7 +166,9 @@ const bool registered = register_command(Command{
     "report", "Maintenance record of one aircraft: per position and per serial the history, trends in cycles and days, RUL, findings",
     [](CLI::App& sub) -> std::function<int()> {
         auto o = std::make_shared<ReportCliOptions>();
-        sub.add_option("--db", o->db, "Maintenance database (SQLite)")->capture_default_str()->check(CLI::ExistingFile);
+        sub.add_option("--db", o->db, "Maintenance database: SQLite file, or a fleet server postgresql://... (docs/fleet-server.md)")
+            ->capture_default_str()
+            ->check(sqlite_file_or_fleet_uri());
         sub.add_option("--tail", o->tail, "Aircraft tail number")->required();
         sub.add_option("--format", o->format, "text, json or csv")->capture_default_str()->check(CLI::IsMember({"text", "json", "csv", "html"}));
         sub.add_option("--out", o->out, "Write the report to this file (whole, or not at all) instead of stdout");
@@ -177,8 +180,8 @@ const bool registered = register_command(Command{
         sub.add_option("--seed", o->record.rul.seed, "Seed of the Monte Carlo draws (recorded in the report)")->capture_default_str();
         return [o] {
             if (o->format == "html") throw EmadiagError(kHtmlHook);
-            db::Database database(o->db);
-            const pg::FleetRecord record = pg::build_fleet_record(database, o->tail, o->record);
+            db::OpenedSource database = db::open_record_source(o->db);
+            const pg::FleetRecord record = pg::build_fleet_record(*database.source, o->tail, o->record);
             std::string text;
             if (o->format == "json") {
                 text = pg::to_json(record).dump(2) + "\n";

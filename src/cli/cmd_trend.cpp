@@ -6,6 +6,7 @@
 // people; --json is the stable schema of docs/trend-report.md; html is one self-contained file with
 // the plots (report/html_report.hpp, docs/report-html.md).
 #include "cli/command.hpp"
+#include "cli/db_source.hpp"
 
 #include "core/emadiag_error.hpp"
 #include "emadiag/db/database.hpp"
@@ -178,7 +179,9 @@ const bool registered = register_command(Command{
     "trend", "Trend report of one aircraft: per parameter the degradation trend, predicted limit crossing and remaining useful life",
     [](CLI::App& sub) -> std::function<int()> {
         auto o = std::make_shared<TrendCliOptions>();
-        sub.add_option("--db", o->db, "Maintenance database (SQLite) with the test sessions")->required()->check(CLI::ExistingFile);
+        sub.add_option("--db", o->db, "Maintenance database with the test sessions: SQLite file, or a fleet server postgresql://...")
+            ->required()
+            ->check(sqlite_file_or_fleet_uri());
         sub.add_option("--tail", o->tail, "Aircraft tail number")->required();
         sub.add_option("--phase", o->phase, "Sessions of this phase: pre-flight, post-flight or all")
             ->capture_default_str()
@@ -197,15 +200,15 @@ const bool registered = register_command(Command{
             t.rul.horizon_days = o->horizon_days;
             t.rul.draws = o->draws;
             t.rul.seed = o->seed;
-            db::Database database(o->db);
-            const pg::TrendReport report = pg::load_trend_report(database, o->tail, t);
+            db::OpenedSource database = db::open_record_source(o->db);
+            const pg::TrendReport report = pg::load_trend_report(*database.source, o->tail, t);
             const std::string format = o->json ? "json" : o->format;
             std::ostringstream text;
             if (format == "json") {
                 text << pg::to_json(report).dump(2) << '\n';
             } else if (format == "html") {
                 const report::ReportDocument doc = report::from_trend_report(
-                    report, db::list_test_sessions(database, o->tail), {now_utc(), EMADIAG_VERSION, o->db});
+                    report, database.source->sessions_of_tail(o->tail), {now_utc(), EMADIAG_VERSION, o->db});
                 text << report::render_html(doc);
             } else {
                 print_text(text, report);

@@ -194,6 +194,11 @@ const AxisTrend* ParameterHistory::preferred() const {
 }
 
 FleetRecord build_fleet_record(db::Database& database, const std::string& tail_number, const FleetRecordOptions& options) {
+    db::SqliteRecordSource source(database);
+    return build_fleet_record(source, tail_number, options);
+}
+
+FleetRecord build_fleet_record(db::RecordSource& database, const std::string& tail_number, const FleetRecordOptions& options) {
     if (options.phase != kPhaseAll && options.phase != "pre-flight" && options.phase != "post-flight" && options.phase != "in-flight" &&
         options.phase != "load-rig")
         throw EmadiagError("phase \"" + options.phase + "\": expected pre-flight, post-flight, in-flight, load-rig or all");
@@ -201,19 +206,20 @@ FleetRecord build_fleet_record(db::Database& database, const std::string& tail_n
     if (!(options.horizon_cycles > 0) || !(options.horizon_cycles <= kMaxHorizonDays))
         throw EmadiagError("horizon_cycles " + std::to_string(options.horizon_cycles) + " is not in (0, " + std::to_string(kMaxHorizonDays) + "]");
     db::check_tail_number(tail_number);
-    const auto tails = list_tail_numbers(database);
+    const auto tails = database.tail_numbers();
     if (std::find(tails.begin(), tails.end(), tail_number) == tails.end()) {
         std::string known;
         for (std::size_t i = 0; i < tails.size() && i < 20; ++i) known += (i ? ", " : "") + tails[i];
         if (tails.size() > 20) known += ", ... (" + std::to_string(tails.size()) + " in all)";
-        throw EmadiagError("tail number \"" + tail_number + "\" is not in " + database.path() + " (" +
+        throw EmadiagError("tail number \"" + tail_number + "\" is not in " + database.name() + " (" +
                            (tails.empty() ? std::string("it holds no aircraft") : "its tail numbers: " + known) + ")");
     }
     FleetRecord r;
     r.tail_number = tail_number;
-    r.database = database.path();
+    r.database = database.name();
     r.options = options;
-    auto all = db::list_test_sessions(database, tail_number);
+    db::check_tail_number(tail_number);
+    auto all = database.sessions_of_tail(tail_number);
     r.sessions_total = static_cast<std::int64_t>(all.size());
     std::set<std::int64_t> amended;
     for (const auto& s : all)
@@ -232,8 +238,8 @@ FleetRecord build_fleet_record(db::Database& database, const std::string& tail_n
     for (auto& s : all)
         if (!amended.count(s.session_id)) current.push_back(std::move(s));
     all.clear();
-    r.installations = db::list_installations(database, tail_number);
-    r.open_findings = db::list_discovery_findings(database, tail_number, true);
+    r.installations = database.installations_of_tail(tail_number);
+    r.open_findings = database.discovery_findings(tail_number, true);
 
     // Per position: the history across serials; the trends of the serial installed now.
     std::map<std::string, std::vector<db::StoredTestSession>> by_position;
@@ -269,16 +275,14 @@ FleetRecord build_fleet_record(db::Database& database, const std::string& tail_n
         v.key = serial;
         std::vector<db::StoredTestSession> sessions;
         std::set<std::int64_t> amended_here;
-        v.installations = db::list_installations_of_serial(database, serial);
-        db::Statement elsewhere(database, "SELECT 1 FROM test_sessions WHERE actuator_serial = ? AND tail_number != ? LIMIT 1");
-        elsewhere.bind(1, serial).bind(2, tail_number);
-        const bool only_here = !elsewhere.step();
+        v.installations = database.installations_of_serial(serial);
+        const bool only_here = !database.serial_seen_elsewhere(serial, tail_number);
         std::vector<db::StoredTestSession> of_serial;
         if (only_here) {
             for (const auto& s : current)
                 if (s.actuator_serial == serial) of_serial.push_back(s);
         } else {
-            of_serial = db::list_sessions_of_serial(database, serial);
+            of_serial = database.sessions_of_serial(serial);
         }
         for (const auto& s : of_serial)
             if (s.amends_session_id) amended_here.insert(*s.amends_session_id);

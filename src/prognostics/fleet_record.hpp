@@ -8,6 +8,7 @@
 // installation there (a new actuator starts a new degradation); its history shows every serial.
 // Pure data for the text/JSON/CSV writers here and the HTML writer (src/report).
 #include "emadiag/db/database.hpp"
+#include "emadiag/db/record_source.hpp"
 #include "emadiag/db/record_store.hpp"
 #include "emadiag/db/test_session_store.hpp"
 #include "prognostics/trend_report.hpp"
@@ -79,6 +80,8 @@ struct FleetRecord {
 /// The record of one tail. Throws EmadiagError for an invalid or unknown tail (listing the tails the
 /// database holds) or a bad option.
 [[nodiscard]] FleetRecord build_fleet_record(db::Database& database, const std::string& tail_number, const FleetRecordOptions& options);
+/// The same from any record source (the station's SQLite file or a fleet server).
+[[nodiscard]] FleetRecord build_fleet_record(db::RecordSource& source, const std::string& tail_number, const FleetRecordOptions& options);
 
 /// The documented JSON (schema kReportSchema, version kReportSchemaVersion; docs/fleet-record.md).
 [[nodiscard]] nlohmann::ordered_json to_json(const FleetRecord& record);

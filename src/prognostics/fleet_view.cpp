@@ -52,13 +52,18 @@ DegradationFit fit_from_stats(const db::SeriesStats& s, bool cycles) {
 }
 
 std::vector<FleetRow> build_fleet_view(db::Database& database, const FleetOptions& options) {
+    db::SqliteRecordSource source(database);
+    return build_fleet_view(source, options);
+}
+
+std::vector<FleetRow> build_fleet_view(db::RecordSource& database, const FleetOptions& options) {
     check(options.rul);
     std::map<std::string, std::string> ata;
-    for (const auto& p : db::list_positions(database)) ata[p.position] = p.ata_reference;
+    for (const auto& p : database.positions()) ata[p.position] = p.ata_reference;
     std::map<std::tuple<std::string, std::string, std::string>, std::vector<db::SeriesStats>> stats;
-    for (auto& s : db::list_series_stats(database)) stats[{s.tail_number, s.position, s.actuator_serial}].push_back(std::move(s));
+    for (auto& s : database.series_stats()) stats[{s.tail_number, s.position, s.actuator_serial}].push_back(std::move(s));
     std::vector<FleetRow> rows;
-    for (const auto& ps : db::list_position_status(database)) {
+    for (const auto& ps : database.position_status()) {
         FleetRow row;
         row.tail_number = ps.tail_number;
         row.position = ps.position.empty() ? "(none)" : ps.position;

@@ -8,6 +8,7 @@
 // fit_linear over the same points; `report` also weighs a log-linear model), its RUL interval by
 // estimate_rul's Monte Carlo.
 #include "emadiag/db/database.hpp"
+#include "emadiag/db/record_source.hpp"
 #include "emadiag/db/record_store.hpp"
 #include "prognostics/degradation_fit.hpp"
 #include "prognostics/rul_estimate.hpp"
@@ -58,6 +59,8 @@ struct FleetRow {
 
 /// Every tail and position, most urgent first.
 [[nodiscard]] std::vector<FleetRow> build_fleet_view(db::Database& database, const FleetOptions& options);
+/// The same from any record source (the station's SQLite file or a fleet server).
+[[nodiscard]] std::vector<FleetRow> build_fleet_view(db::RecordSource& source, const FleetOptions& options);
 
 [[nodiscard]] nlohmann::ordered_json to_json(const std::vector<FleetRow>& rows, const FleetOptions& options);
 

@@ -104,15 +104,20 @@ std::vector<std::string> list_tail_numbers(db::Database& database) {
 }
 
 TrendReport load_trend_report(db::Database& database, const std::string& tail_number, const TrendOptions& options) {
+    db::SqliteRecordSource source(database);
+    return load_trend_report(source, tail_number, options);
+}
+
+TrendReport load_trend_report(db::RecordSource& database, const std::string& tail_number, const TrendOptions& options) {
     check(options);
-    const auto tails = list_tail_numbers(database);
+    const auto tails = database.tail_numbers();
     if (std::find(tails.begin(), tails.end(), tail_number) == tails.end()) {
         std::string known;
         for (std::size_t i = 0; i < tails.size(); ++i) known += (i ? ", " : "") + tails[i];
-        throw EmadiagError("tail number \"" + tail_number + "\" is not in " + database.path() + " (" +
+        throw EmadiagError("tail number \"" + tail_number + "\" is not in " + database.name() + " (" +
                            (tails.empty() ? std::string("it holds no aircraft") : "its tail numbers: " + known) + ")");
     }
-    return build_trend_report(tail_number, db::list_test_sessions(database, tail_number), options);
+    return build_trend_report(tail_number, database.sessions_of_tail(tail_number), options);
 }
 
 json to_json(const TrendReport& r) {

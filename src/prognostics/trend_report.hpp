@@ -4,6 +4,7 @@
 // and the chosen model (degradation_fit), the predicted limit crossing and the remaining useful life
 // with its 90 % interval (rul_estimate). Pure computation; to_json gives the documented schema.
 #include "emadiag/db/database.hpp"
+#include "emadiag/db/record_source.hpp"
 #include "emadiag/db/test_session_store.hpp"
 #include "prognostics/degradation_fit.hpp"
 #include "prognostics/rul_estimate.hpp"
@@ -70,6 +71,8 @@ struct TrendReport {
 /// The report of one tail from the database. Throws EmadiagError naming the tail and listing the
 /// tails the database holds when it has no such aircraft.
 [[nodiscard]] TrendReport load_trend_report(db::Database& database, const std::string& tail_number, const TrendOptions& options);
+/// The same from any record source (the station's SQLite file or a fleet server).
+[[nodiscard]] TrendReport load_trend_report(db::RecordSource& source, const std::string& tail_number, const TrendOptions& options);
 
 /// The documented JSON form (schema kTrendSchema, version kTrendSchemaVersion), keys in document order.
 [[nodiscard]] nlohmann::ordered_json to_json(const TrendReport& report);

@@ -33,7 +33,7 @@ using ::testing::Pair;
 using ::testing::SizeIs;
 using ::testing::ThrowsMessage;
 
-constexpr int kNewestSchemaVersion = 4;  // schema/004_append_only.sql
+constexpr int kNewestSchemaVersion = 5;  // schema/005_sync.sql
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -104,6 +104,8 @@ std::map<std::string, std::int64_t> row_counts(Database& db) {
     std::vector<std::string> tables;
     Statement names(db, "SELECT name FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite_%' ORDER BY name");
     while (names.step()) tables.push_back(names.column_text(0));
+    // station_identity holds the station's UUID from the moment the file is made (005_sync.sql): not session data.
+    std::erase(tables, std::string("station_identity"));
     std::map<std::string, std::int64_t> counts;
     for (const auto& t : tables) {
         Statement count(db, "SELECT count(*) FROM \"" + t + "\"");
@@ -377,7 +379,8 @@ TEST(Database, RefusesADatabaseOneVersionNewerThanTheCode) {
         db.exec("PRAGMA user_version = " + std::to_string(kNewestSchemaVersion + 1));
     }
     EXPECT_THAT([&] { Database db(file.path()); },
-                ThrowsMessage<DbError>(HasSubstr("has schema version 5, newer than this emadiag understands (4)")));
+                ThrowsMessage<DbError>(HasSubstr("has schema version " + std::to_string(kNewestSchemaVersion + 1) +
+                                             ", newer than this emadiag understands (" + std::to_string(kNewestSchemaVersion) + ")")));
     RawConnection raw(file.path());
     EXPECT_EQ(raw.query_int("PRAGMA user_version"), kNewestSchemaVersion + 1) << "never downgraded";
     EXPECT_EQ(raw.query_int("SELECT count(*) FROM test_sessions"), 1);

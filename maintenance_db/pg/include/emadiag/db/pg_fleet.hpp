@@ -1,0 +1,109 @@
+#pragma once
+// The fleet server: PostgreSQL through libpq (the C API: Debian's libpq-dev, no C++ wrapper to
+// build; COPY streaming and the SQLSTATE of every error are plain calls). Stations push their
+// sessions to it with sync_to_fleet; the reports read it through PgRecordSource. Schema and
+// migrations: maintenance_db/pg_schema/*.sql; docs/fleet-server.md.
+#include "emadiag/db/database.hpp"
+#include "emadiag/db/record_source.hpp"
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+struct pg_conn;
+
+namespace emadiag::db {
+
+/// True for "postgresql://..." and "postgres://..." (a fleet server rather than a SQLite file).
+[[nodiscard]] bool is_fleet_uri(const std::string& text);
+/// Throws DbError when the connection string is not one libpq accepts, or when it carries a
+/// password (passwords belong in a service file or PGPASSFILE, never on a command line). The
+/// message never repeats the password.
+void check_fleet_uri(const std::string& uri);
+
+/// One libpq connection. Errors are DbError with the server's message and SQLSTATE.
+class PgConnection {
+public:
+    explicit PgConnection(const std::string& uri);
+    ~PgConnection();
+    PgConnection(const PgConnection&) = delete;
+    PgConnection& operator=(const PgConnection&) = delete;
+
+    /// Rows of a query with text parameters (std::nullopt: NULL); every value as text, NULL as nullopt.
+    using Row = std::vector<std::optional<std::string>>;
+    std::vector<Row> query(const std::string& sql, const std::vector<std::optional<std::string>>& params = {});
+    void exec(const std::string& sql);
+    /// COPY table (columns) FROM STDIN: rows given as text-format lines through `fill`, which calls
+    /// `put` as often as it likes (sent on in pieces of about 1 MiB, so memory stays bounded).
+    void copy_in(const std::string& table_and_columns, const std::function<void(const std::function<void(const std::string&)>&)>& fill);
+    [[nodiscard]] const std::string& uri() const { return uri_; }
+    [[nodiscard]] pg_conn* handle() const { return conn_; }
+
+private:
+    pg_conn* conn_ = nullptr;
+    std::string uri_;
+};
+
+/// COPY text format: one field escaped; NULL as \N.
+[[nodiscard]] std::string copy_field(const std::string& text);
+[[nodiscard]] std::string copy_field(const std::optional<std::string>& text);
+
+/// Brings the fleet server's schema to the newest version (pg_schema/*.sql, in order, each in one
+/// transaction). Run as the database owner. Returns the version reached.
+int migrate_fleet_server(PgConnection& pg);
+/// Creates (or grants) a station login role: member of emadiag_station, no password set (the
+/// administrator sets it with \password, or uses peer / certificate authentication).
+void add_station_role(PgConnection& pg, const std::string& role);
+
+struct SyncOptions {
+    std::size_t batch_sessions = 2000;  ///< whole sessions per PostgreSQL transaction
+    int max_retries = 20;               ///< on deadlock or a concurrent sync of the same file
+    std::function<void(const std::string&)> progress;  ///< one line per committed batch (may be empty)
+};
+struct SyncResult {
+    std::string station_uuid;
+    std::int64_t sessions_pushed = 0, sessions_recovered = 0, sessions_already = 0;
+    std::int64_t runs = 0, samples = 0, raw_log_bytes = 0, discovery_findings = 0, batches = 0, retries = 0;
+    double seconds = 0;
+};
+/// Pushes every session of the station that the server does not have yet (runs, samples, raw logs,
+/// estimates, findings, artifacts, installations), then the discovery findings. Each batch of whole
+/// sessions is one PostgreSQL transaction; what the server committed is recorded in the station's
+/// tables synced_sessions / synced_discovery_findings (schema/005_sync.sql). A sync killed at any
+/// point leaves no partial session on the server, and the next sync records what was committed and
+/// pushes the rest.
+SyncResult sync_to_fleet(Database& station, const std::string& uri, const SyncOptions& options = {});
+
+/// The reports' view of a fleet server.
+class PgRecordSource final : public RecordSource {
+public:
+    explicit PgRecordSource(const std::string& uri);
+    [[nodiscard]] const std::string& name() const override { return pg_.uri(); }
+    [[nodiscard]] std::vector<std::string> tail_numbers() override;
+    [[nodiscard]] std::vector<StoredTestSession> sessions_of_tail(const std::string& tail_number) override;
+    [[nodiscard]] std::vector<StoredTestSession> sessions_of_serial(const std::string& actuator_serial) override;
+    [[nodiscard]] bool serial_seen_elsewhere(const std::string& actuator_serial, const std::string& tail_number) override;
+    [[nodiscard]] std::vector<StoredInstallation> installations_of_tail(const std::string& tail_number) override;
+    [[nodiscard]] std::vector<StoredInstallation> installations_of_serial(const std::string& actuator_serial) override;
+    [[nodiscard]] std::vector<StoredDiscoveryFinding> discovery_findings(const std::string& tail_number, bool open_only) override;
+    [[nodiscard]] std::vector<StoredPosition> positions() override;
+    [[nodiscard]] std::vector<SeriesStats> series_stats() override;
+    [[nodiscard]] std::vector<PositionStatus> position_status() override;
+
+private:
+    std::vector<StoredTestSession> sessions_where(const std::string& where, const std::string& value);
+    PgConnection pg_;
+};
+
+/// A RecordSource for --db: a fleet server for a postgresql:// URI, else the SQLite file (opened and
+/// migrated as the reports always did).
+struct OpenedSource {
+    std::unique_ptr<Database> sqlite;
+    std::unique_ptr<RecordSource> source;
+};
+[[nodiscard]] OpenedSource open_record_source(const std::string& db);
+
+}  // namespace emadiag::db

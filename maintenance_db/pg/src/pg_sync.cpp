@@ -1,0 +1,575 @@
+// emadiag sync: a station's sessions to the fleet server, whole sessions per transaction.
+#include "emadiag/db/db_error.hpp"
+#include "emadiag/db/pg_fleet.hpp"
+#include "emadiag/db/record_store.hpp"
+#include "emadiag/db/sha256.hpp"
+
+#include <sqlite3.h>
+
+#include <algorithm>
+#include <chrono>
+#include <charconv>
+#include <ctime>
+#include <map>
+#include <set>
+#include <unordered_map>
+
+namespace emadiag::db {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr std::size_t kRawChunkBytes = 1 << 20;  // raw log chunk: at most 1 MiB on either side
+constexpr std::int64_t kRecoverPage = 50000;
+
+std::string d2s(double v) {
+    char buf[64];
+    const auto r = std::to_chars(buf, buf + sizeof buf, v);
+    return std::string(buf, static_cast<std::size_t>(r.ptr - buf));
+}
+std::string opt_d(const std::optional<double>& v) { return v ? d2s(*v) : "\\N"; }
+std::string opt_i(const std::optional<std::int64_t>& v) { return v ? std::to_string(*v) : "\\N"; }
+std::string f(const std::string& s) { return copy_field(s); }
+std::string f(const std::optional<std::string>& s) { return copy_field(s); }
+std::int64_t to_i64(const std::string& s) { return static_cast<std::int64_t>(std::stoll(s)); }
+
+std::string now_iso() {
+    const std::time_t t = std::time(nullptr);
+    std::tm tm{};
+    gmtime_r(&t, &tm);
+    char buf[32];
+    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+    return buf;
+}
+
+// The station's utc_days (maintenance_db/src/test_session_store.cpp), for the summary terms.
+std::int64_t days_from_civil(int y, unsigned m, unsigned d) {
+    y -= m <= 2 ? 1 : 0;
+    const int era = (y >= 0 ? y : y - 399) / 400;
+    const unsigned yoe = static_cast<unsigned>(y - era * 400);
+    const unsigned doy = (153 * (m + (m > 2 ? -3 : 9)) + 2) / 5 + d - 1;
+    const unsigned doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
+    return static_cast<std::int64_t>(era) * 146097 + static_cast<std::int64_t>(doe) - 719468;
+}
+double utc_days(const std::string& iso) {
+    const auto n = [&](std::size_t at, std::size_t len) { return std::stoi(iso.substr(at, len)); };
+    return static_cast<double>(days_from_civil(n(0, 4), static_cast<unsigned>(n(5, 2)), static_cast<unsigned>(n(8, 2)))) +
+           (n(11, 2) * 3600.0 + n(14, 2) * 60.0 + n(17, 2)) / 86400.0;
+}
+
+/// A session's global identity as a UUID: SHA-256 of station UUID and local id, version 8 (custom).
+std::string session_uuid(const std::string& station_uuid, std::int64_t local_id) {
+    std::string h = sha256_hex("emadiag-session-uuid:" + station_uuid + ":" + std::to_string(local_id)).substr(0, 32);
+    h[12] = '8';
+    h[16] = "89ab"[std::stoi(h.substr(16, 1), nullptr, 16) % 4];
+    return h.substr(0, 8) + "-" + h.substr(8, 4) + "-" + h.substr(12, 4) + "-" + h.substr(16, 4) + "-" + h.substr(20, 12);
+}
+
+bool retryable(const DbError& e) {
+    const std::string m = e.what();
+    return m.find("SQLSTATE 40P01") != std::string::npos || m.find("SQLSTATE 40001") != std::string::npos ||
+           m.find("SQLSTATE 23505") != std::string::npos;
+}
+
+/// The part of a local session the sync needs beyond the rows it copies: for the summary terms.
+struct LightSession {
+    std::int64_t id = 0;
+    std::string tail, serial, started_utc, verdict;
+    std::optional<std::string> position;
+    std::string position_ata, position_description;
+    std::optional<std::int64_t> cycles;
+    std::optional<std::int64_t> amends;
+    std::vector<StoredFinding> findings;
+};
+
+constexpr const char* kLocalSessionColumns =
+    "s.session_id, s.tail_number, s.actuator_serial, s.phase, s.started_utc, s.tool_version, s.verdict, s.verdict_note, s.limits_json, "
+    "s.position, coalesce(p.ata_reference, ''), coalesce(p.description, ''), s.cycles, s.hours_h, s.operator_id, s.technician_name, "
+    "s.technician_certificate, s.work_performed, s.source, s.limits_sha256, s.amends_session_id, s.correction_reason, s.prev_sha256, "
+    "s.content_sha256 FROM test_sessions s LEFT JOIN positions p ON p.position = s.position";
+
+std::optional<std::string> col_opt_text(Statement& st, int c) { return st.column_is_null(c) ? std::nullopt : std::optional(st.column_text(c)); }
+std::optional<double> col_opt_d(Statement& st, int c) { return st.column_is_null(c) ? std::nullopt : std::optional(st.column_double(c)); }
+std::optional<std::int64_t> col_opt_i(Statement& st, int c) { return st.column_is_null(c) ? std::nullopt : std::optional(st.column_int(c)); }
+
+void load_findings(Database& db, std::int64_t lo, std::int64_t hi, std::map<std::int64_t, LightSession>& into) {
+    Statement st(db, "SELECT session_id, parameter, estimator, value, std_error, limit_value, limit_kind, status, note FROM findings "
+                     "WHERE session_id BETWEEN ? AND ? ORDER BY session_id, parameter, estimator");
+    st.bind(1, lo).bind(2, hi);
+    while (st.step()) {
+        auto it = into.find(st.column_int(0));
+        if (it == into.end()) continue;
+        StoredFinding x;
+        x.parameter = st.column_text(1);
+        x.estimator = st.column_text(2);
+        x.value = col_opt_d(st, 3);
+        x.std_error = col_opt_d(st, 4);
+        x.limit_value = col_opt_d(st, 5);
+        x.limit_kind = st.column_text(6);
+        x.status = st.column_text(7);
+        x.note = st.column_text(8);
+        it->second.findings.push_back(std::move(x));
+    }
+}
+
+LightSession load_light(Database& db, std::int64_t id) {
+    Statement st(db, "SELECT s.session_id, s.tail_number, s.actuator_serial, s.started_utc, s.verdict, s.position, s.cycles, s.amends_session_id "
+                     "FROM test_sessions s WHERE s.session_id = ?");
+    st.bind(1, id);
+    if (!st.step()) throw DbError("station session " + std::to_string(id) + " is missing", DbErrorKind::Invalid);
+    std::map<std::int64_t, LightSession> m;
+    LightSession& l = m[id];
+    l.id = id;
+    l.tail = st.column_text(1);
+    l.serial = st.column_text(2);
+    l.started_utc = st.column_text(3);
+    l.verdict = st.column_text(4);
+    l.position = col_opt_text(st, 5);
+    l.cycles = col_opt_i(st, 6);
+    l.amends = col_opt_i(st, 7);
+    load_findings(db, id, id, m);
+    return m[id];
+}
+
+class Syncer {
+public:
+    Syncer(Database& station, const std::string& uri, const SyncOptions& o) : db_(station), pg_(uri), server_(uri), o_(o) {}
+
+    SyncResult run() {
+        const auto t0 = Clock::now();
+        {
+            Statement st(db_, "SELECT station_uuid FROM station_identity");
+            if (!st.step()) throw DbError("station database " + db_.path() + " has no station identity", DbErrorKind::Invalid);
+            res_.station_uuid = st.column_text(0);
+        }
+        const auto v = pg_.query("SELECT to_regclass('fleet_schema_version') IS NOT NULL");
+        if (v.at(0).at(0) != std::optional<std::string>("t"))
+            throw DbError("fleet server " + server_ + " has no emadiag schema (run `emadiag fleet-server --to URI` as its owner first)",
+                          DbErrorKind::Invalid);
+        pg_.query("INSERT INTO stations(station_uuid) VALUES ($1) ON CONFLICT DO NOTHING", {res_.station_uuid});
+        const auto who = pg_.query("SELECT station_role, current_user FROM stations WHERE station_uuid = $1", {res_.station_uuid});
+        if (who.empty() || who[0][0] != who[0][1])
+            throw DbError("station " + res_.station_uuid + " (" + db_.path() + ") syncs to " + server_ + " as role " +
+                              (who.empty() ? std::string("?") : who[0][0].value_or("?")) + "; this connection is role " +
+                              (who.empty() ? std::string("?") : who[0][1].value_or("?")),
+                          DbErrorKind::Invalid);
+        for (int attempt = 0;; ++attempt) {
+            try {
+                recover_sessions();
+                while (push_batch()) {
+                }
+                recover_findings();
+                push_findings();
+                break;
+            } catch (const DbError& e) {
+                try {
+                    pg_.exec("ROLLBACK");
+                } catch (...) {
+                }
+                if (!retryable(e) || attempt >= o_.max_retries) throw;
+                ++res_.retries;
+                if (o_.progress) o_.progress(std::string("retrying after: ") + e.what());
+            }
+        }
+        res_.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+        return res_;
+    }
+
+private:
+    std::int64_t local_max(const char* table, const char* col) {
+        Statement st(db_, std::string("SELECT coalesce(max(") + col + "), 0) FROM " + table + " WHERE server = ?");
+        st.bind(1, server_);
+        st.step();
+        return st.column_int(0);
+    }
+
+    /// Records the sessions the server already has (a sync killed after the server committed).
+    void recover_sessions() {
+        for (;;) {
+            const std::int64_t have = local_max("synced_sessions", "session_id");
+            const auto rows = pg_.query("SELECT station_session_id, session_id, content_sha256 FROM test_sessions WHERE station_uuid = $1 "
+                                        "AND station_session_id > $2 ORDER BY station_session_id LIMIT " + std::to_string(kRecoverPage),
+                                        {res_.station_uuid, std::to_string(have)});
+            if (rows.empty()) return;
+            Transaction tx(db_);
+            Statement& local = db_.cached("SELECT content_sha256 FROM test_sessions WHERE session_id = ?");
+            Statement& rec = db_.cached("INSERT INTO synced_sessions(server, session_id, fleet_session_id, synced_utc) VALUES (?,?,?,?)");
+            const std::string now = now_iso();
+            for (const auto& r : rows) {
+                const std::int64_t id = to_i64(*r[0]);
+                local.reset();
+                local.bind(1, id);
+                if (!local.step() || local.column_text(0) != *r[2])
+                    throw DbError("station session " + std::to_string(id) + " of " + db_.path() + " differs from the copy on " + server_ +
+                                      " (fleet session " + *r[1] + "): the station file is not the one that was synced",
+                                  DbErrorKind::Invalid);
+                local.reset();
+                rec.reset();
+                rec.bind(1, server_).bind(2, id).bind(3, to_i64(*r[1])).bind(4, now).run();
+                fleet_id_[id] = to_i64(*r[1]);
+                ++res_.sessions_recovered;
+            }
+            tx.commit();
+        }
+    }
+
+    std::int64_t fleet_session_of(std::int64_t local) {
+        if (auto it = fleet_id_.find(local); it != fleet_id_.end()) return it->second;
+        Statement& st = db_.cached("SELECT fleet_session_id FROM synced_sessions WHERE server = ? AND session_id = ?");
+        st.bind(1, server_).bind(2, local);
+        if (!st.step()) throw DbError("station session " + std::to_string(local) + " is not synced yet", DbErrorKind::Invalid);
+        const std::int64_t id = st.column_int(0);
+        st.reset();
+        return id;
+    }
+
+    std::vector<std::int64_t> reserve(const std::string& table, const std::string& col, std::size_t n) {
+        std::vector<std::int64_t> ids;
+        if (n == 0) return ids;
+        for (const auto& r : pg_.query("SELECT nextval(pg_get_serial_sequence('" + table + "', '" + col + "')) FROM generate_series(1, $1)",
+                                       {std::to_string(n)}))
+            ids.push_back(to_i64(*r[0]));
+        std::sort(ids.begin(), ids.end());
+        return ids;
+    }
+
+    void register_places(const std::set<std::string>& tails, const std::map<std::string, std::pair<std::string, std::string>>& positions) {
+        for (const auto& t : tails) pg_.query("INSERT INTO aircraft(tail_number) VALUES ($1) ON CONFLICT DO NOTHING", {t});
+        for (const auto& [p, ad] : positions) {
+            pg_.query("INSERT INTO positions(position, ata_reference, description) VALUES ($1, $2, $3) ON CONFLICT DO NOTHING",
+                      {p, ad.first, ad.second});
+            const auto r = pg_.query("SELECT ata_reference FROM positions WHERE position = $1", {p});
+            if (r.empty() || r[0][0] != ad.first)
+                throw DbError("position " + p + " is recorded on " + server_ + " with ATA reference " +
+                                  (r.empty() ? std::string("?") : r[0][0].value_or("?")) +
+                                  ", in " + db_.path() + " with " + ad.first + ": a position keeps its ATA reference",
+                              DbErrorKind::Invalid);
+        }
+    }
+
+    /// One batch of whole sessions in one transaction; false when nothing was left.
+    bool push_batch() {
+        const std::int64_t after = local_max("synced_sessions", "session_id");
+        std::vector<std::int64_t> ids;
+        {
+            Statement st(db_, "SELECT session_id FROM test_sessions WHERE session_id > ? ORDER BY session_id LIMIT ?");
+            st.bind(1, after).bind(2, static_cast<std::int64_t>(o_.batch_sessions));
+            while (st.step()) ids.push_back(st.column_int(0));
+        }
+        if (ids.empty()) return false;
+        const std::int64_t lo = ids.front(), hi = ids.back();
+        std::map<std::int64_t, LightSession> light;
+        std::set<std::string> tails;
+        std::map<std::string, std::pair<std::string, std::string>> positions;
+        std::vector<std::string> session_lines;
+        {
+            Statement st(db_, std::string("SELECT ") + kLocalSessionColumns + " WHERE s.session_id BETWEEN ? AND ? ORDER BY s.session_id");
+            st.bind(1, lo).bind(2, hi);
+            while (st.step()) {
+                LightSession& l = light[st.column_int(0)];
+                l.id = st.column_int(0);
+                l.tail = st.column_text(1);
+                l.serial = st.column_text(2);
+                l.started_utc = st.column_text(4);
+                l.verdict = st.column_text(6);
+                l.position = col_opt_text(st, 9);
+                l.cycles = col_opt_i(st, 12);
+                l.amends = col_opt_i(st, 20);
+                tails.insert(l.tail);
+                if (l.position) positions[*l.position] = {st.column_text(10), st.column_text(11)};
+                // Columns after the identity and the fleet's own session_id (filled in below).
+                session_lines.push_back(f(l.tail) + '\t' + f(col_opt_text(st, 9)) + '\t' + f(l.serial) + '\t' + f(st.column_text(3)) + '\t' +
+                                        f(l.started_utc) + '\t' + opt_i(l.cycles) + '\t' + opt_d(col_opt_d(st, 13)) + '\t' +
+                                        f(st.column_text(14)) + '\t' + f(st.column_text(15)) + '\t' + f(st.column_text(16)) + '\t' +
+                                        f(st.column_text(17)) + '\t' + f(st.column_text(18)) + '\t' + f(st.column_text(5)) + '\t' +
+                                        f(l.verdict) + '\t' + f(st.column_text(7)) + '\t' + f(st.column_text(8)) + '\t' +
+                                        f(st.column_text(19)) + '\t' + f(st.column_text(21)) + '\t' + f(col_opt_text(st, 22)) + '\t' +
+                                        f(col_opt_text(st, 23)));
+            }
+        }
+        load_findings(db_, lo, hi, light);
+        struct LocalRun {
+            std::int64_t run_id, session_id;
+            std::string line;
+            std::int64_t raw_bytes;
+        };
+        std::vector<LocalRun> runs;
+        {
+            Statement st(db_, "SELECT r.run_id, r.session_id, r.tail_number, r.actuator_serial, r.started_utc, r.source, r.load_case, r.sequence, "
+                              "r.k_t_nm_per_a, r.j_kgm2, r.tau, r.sample_period_s, r.valid, r.status_note, r.meta_json, "
+                              "coalesce(g.format, ''), coalesce(length(g.content), 0) FROM runs r LEFT JOIN raw_logs g ON g.run_id = r.run_id "
+                              "WHERE r.session_id BETWEEN ? AND ? ORDER BY r.run_id");
+            st.bind(1, lo).bind(2, hi);
+            while (st.step()) {
+                runs.push_back({st.column_int(0), st.column_int(1),
+                                f(st.column_text(2)) + '\t' + f(st.column_text(3)) + '\t' + f(st.column_text(4)) + '\t' + f(st.column_text(5)) +
+                                    '\t' + f(st.column_text(6)) + '\t' + f(st.column_text(7)) + '\t' + d2s(st.column_double(8)) + '\t' +
+                                    d2s(st.column_double(9)) + '\t' + d2s(st.column_double(10)) + '\t' + d2s(st.column_double(11)) + '\t' +
+                                    (st.column_int(12) != 0 ? "t" : "f") + '\t' + f(st.column_text(13)) + '\t' + f(st.column_text(14)) +
+                                    '\t' + f(st.column_text(15)) + '\t' + std::to_string(st.column_int(16)),
+                                st.column_int(16)});
+            }
+        }
+
+        std::vector<std::int64_t> sids;
+        std::int64_t samples = 0, raw_bytes = 0;
+        try {
+            pg_.exec("BEGIN");
+            register_places(tails, positions);
+            sids = reserve("test_sessions", "session_id", ids.size());
+            const auto rids = reserve("runs", "run_id", runs.size());
+            std::unordered_map<std::int64_t, std::int64_t> batch_ids, run_ids;
+            for (std::size_t i = 0; i < ids.size(); ++i) batch_ids[ids[i]] = sids[i];
+            for (std::size_t i = 0; i < runs.size(); ++i) run_ids[runs[i].run_id] = rids[i];
+            const auto fleet = [&](std::int64_t local) {
+                const auto it = batch_ids.find(local);
+                return it != batch_ids.end() ? it->second : fleet_session_of(local);
+            };
+            pg_.copy_in("test_sessions (session_id, session_uuid, station_uuid, station_session_id, tail_number, position, actuator_serial, "
+                        "phase, started_utc, cycles, hours_h, operator_id, technician_name, technician_certificate, work_performed, source, "
+                        "tool_version, verdict, verdict_note, limits_json, limits_sha256, correction_reason, prev_sha256, content_sha256, "
+                        "amends_session_id)",
+                        [&](const auto& put) {
+                            for (std::size_t i = 0; i < ids.size(); ++i) {
+                                const LightSession& l = light.at(ids[i]);
+                                put(std::to_string(sids[i]) + '\t' + session_uuid(res_.station_uuid, ids[i]) + '\t' + res_.station_uuid + '\t' +
+                                    std::to_string(ids[i]) + '\t' + session_lines[i] + '\t' + (l.amends ? std::to_string(fleet(*l.amends)) : "\\N") +
+                                    '\n');
+                            }
+                        });
+            if (!runs.empty()) {
+                pg_.copy_in("runs (run_id, session_id, tail_number, actuator_serial, started_utc, source, load_case, sequence, k_t_nm_per_a, j_kgm2, "
+                            "tau, sample_period_s, valid, status_note, meta_json, raw_log_format, raw_log_bytes)",
+                            [&](const auto& put) {
+                                for (const auto& r : runs) put(std::to_string(run_ids.at(r.run_id)) + '\t' + std::to_string(batch_ids.at(r.session_id)) + '\t' + r.line + '\n');
+                            });
+                pg_.copy_in("estimates (run_id, estimator, parameter, value, std_error, identifiable, method, note)", [&](const auto& put) {
+                    Statement st(db_, "SELECT e.run_id, e.estimator, e.parameter, e.value, e.std_error, e.identifiable, e.method, e.note FROM estimates e "
+                                      "JOIN runs r ON r.run_id = e.run_id WHERE r.session_id BETWEEN ? AND ?");
+                    st.bind(1, lo).bind(2, hi);
+                    while (st.step())
+                        put(std::to_string(run_ids.at(st.column_int(0))) + '\t' + f(st.column_text(1)) + '\t' + f(st.column_text(2)) + '\t' +
+                            opt_d(col_opt_d(st, 3)) + '\t' + d2s(st.column_double(4)) + '\t' + (st.column_int(5) != 0 ? "t" : "f") + '\t' +
+                            f(st.column_text(6)) + '\t' + f(st.column_text(7)) + '\n');
+                });
+                // Samples streamed from the station file: never all in memory.
+                pg_.copy_in("samples (run_id, sample_index, t_s, current_a, speed_rad_s, theta_m_rad, hinge_moment_nm, command_deg)",
+                            [&](const auto& put) {
+                                Statement st(db_, "SELECT x.run_id, x.sample_index, x.t_s, x.current_a, x.speed_rad_s, x.theta_m_rad, "
+                                                  "x.hinge_moment_nm, x.command_deg FROM samples x JOIN runs r ON r.run_id = x.run_id "
+                                                  "WHERE r.session_id BETWEEN ? AND ?");
+                                st.bind(1, lo).bind(2, hi);
+                                std::string line;
+                                while (st.step()) {
+                                    line = std::to_string(run_ids.at(st.column_int(0))) + '\t' + std::to_string(st.column_int(1));
+                                    for (int c = 2; c < 8; ++c) line += '\t' + d2s(st.column_double(c));
+                                    line += '\n';
+                                    put(line);
+                                    ++samples;
+                                }
+                            });
+                // Raw logs streamed in chunks straight from the SQLite blob.
+                pg_.copy_in("raw_log_chunks (run_id, chunk_index, content)", [&](const auto& put) {
+                    std::string chunk, line;
+                    static const char* hex = "0123456789abcdef";
+                    for (const auto& r : runs) {
+                        if (r.raw_bytes == 0) continue;
+                        sqlite3_blob* blob = nullptr;
+                        if (sqlite3_blob_open(db_.handle(), "main", "raw_logs", "content", r.run_id, 0, &blob) != SQLITE_OK)
+                            throw DbError("cannot read the raw log of run " + std::to_string(r.run_id) + ": " + db_.error_text());
+                        const int total = sqlite3_blob_bytes(blob);
+                        int chunk_index = 0;
+                        for (int at = 0; at < total; at += static_cast<int>(kRawChunkBytes), ++chunk_index) {
+                            const int n = std::min(total - at, static_cast<int>(kRawChunkBytes));
+                            chunk.resize(static_cast<std::size_t>(n));
+                            if (sqlite3_blob_read(blob, chunk.data(), n, at) != SQLITE_OK) {
+                                sqlite3_blob_close(blob);
+                                throw DbError("cannot read the raw log of run " + std::to_string(r.run_id) + ": " + db_.error_text());
+                            }
+                            line = std::to_string(run_ids.at(r.run_id)) + '\t' + std::to_string(chunk_index) + "\t\\\\x";
+                            line.reserve(line.size() + 2 * chunk.size() + 1);
+                            for (unsigned char c : chunk) {
+                                line += hex[c >> 4];
+                                line += hex[c & 15];
+                            }
+                            line += '\n';
+                            put(line);
+                        }
+                        sqlite3_blob_close(blob);
+                        raw_bytes += total;
+                    }
+                });
+            }
+            pg_.copy_in("findings (session_id, parameter, estimator, value, std_error, limit_value, limit_kind, status, note)", [&](const auto& put) {
+                for (const auto id : ids)
+                    for (const auto& x : light.at(id).findings)
+                        put(std::to_string(batch_ids.at(id)) + '\t' + f(x.parameter) + '\t' + f(x.estimator) + '\t' + opt_d(x.value) + '\t' +
+                            opt_d(x.std_error) + '\t' + opt_d(x.limit_value) + '\t' + f(x.limit_kind) + '\t' + f(x.status) + '\t' + f(x.note) + '\n');
+            });
+            pg_.copy_in("session_artifacts (session_id, role, name, sha256)", [&](const auto& put) {
+                Statement st(db_, "SELECT session_id, role, name, sha256 FROM session_artifacts WHERE session_id BETWEEN ? AND ?");
+                st.bind(1, lo).bind(2, hi);
+                while (st.step())
+                    put(std::to_string(batch_ids.at(st.column_int(0))) + '\t' + f(st.column_text(1)) + '\t' + f(st.column_text(2)) + '\t' +
+                        f(st.column_text(3)) + '\n');
+            });
+            pg_.copy_in("installations (tail_number, position, from_serial, to_serial, detected_utc, cycles, hours_h, session_id)", [&](const auto& put) {
+                Statement st(db_, "SELECT tail_number, position, from_serial, to_serial, detected_utc, cycles, hours_h, session_id FROM installations "
+                                  "WHERE session_id BETWEEN ? AND ? ORDER BY installation_id");
+                st.bind(1, lo).bind(2, hi);
+                while (st.step())
+                    put(f(st.column_text(0)) + '\t' + f(st.column_text(1)) + '\t' + f(st.column_text(2)) + '\t' + f(st.column_text(3)) + '\t' +
+                        f(st.column_text(4)) + '\t' + opt_i(col_opt_i(st, 5)) + '\t' + opt_d(col_opt_d(st, 6)) + '\t' +
+                        std::to_string(batch_ids.at(st.column_int(7))) + '\n');
+            });
+            // The summary terms, in the order the station applied them (add_to_summaries): per session, the
+            // amended session's measurements out (-1), then the session's own in (+1).
+            pg_.copy_in("session_measurements (session_id, ordinal, sign, of_session_id, tail_number, position, actuator_serial, parameter, days, "
+                        "w, wy, wyy, cycles, value, std_error, limit_kind, limit_value)",
+                        [&](const auto& put) {
+                            for (const auto id : ids) {
+                                const LightSession& l = light.at(id);
+                                int ordinal = 0;
+                                const auto emit = [&](const LightSession& s, int sign) {
+                                    const double days = utc_days(s.started_utc);
+                                    for (const auto& m : session_measurements(s.findings)) {
+                                        const double w = sign / (m.std_error * m.std_error);
+                                        put(std::to_string(batch_ids.at(id)) + '\t' + std::to_string(ordinal++) + '\t' + std::to_string(sign) + '\t' +
+                                            std::to_string(fleet(s.id)) + '\t' + f(s.tail) + '\t' + f(s.position.value_or("")) + '\t' + f(s.serial) +
+                                            '\t' + f(m.parameter) + '\t' + d2s(days) + '\t' + d2s(w) + '\t' + d2s(w * m.value) + '\t' +
+                                            d2s(w * m.value * m.value) + '\t' +
+                                            (s.cycles ? d2s(static_cast<double>(*s.cycles)) : std::string("\\N")) + '\t' + d2s(m.value) + '\t' +
+                                            d2s(m.std_error) + '\t' + f(m.limit_kind) + '\t' + opt_d(m.limit_value) + '\n');
+                                    }
+                                };
+                                if (l.amends) {
+                                    const auto it = light.find(*l.amends);
+                                    emit(it != light.end() ? it->second : load_light(db_, *l.amends), -1);
+                                }
+                                emit(l, +1);
+                            }
+                        });
+            pg_.exec("COMMIT");
+        } catch (const DbError& e) {
+            std::string m = e.what();
+            if (m.rfind("[maintenance_db] ", 0) == 0) m = m.substr(17);
+            throw DbError("sessions " + std::to_string(lo) + ".." + std::to_string(hi) + " of " + db_.path() + ": " + m, e.kind());
+        }
+        // Only now is the batch on the server: record it on the station.
+        {
+            Transaction tx(db_);
+            Statement& rec = db_.cached("INSERT INTO synced_sessions(server, session_id, fleet_session_id, synced_utc) VALUES (?,?,?,?)");
+            const std::string now = now_iso();
+            for (std::size_t i = 0; i < ids.size(); ++i) {
+                rec.reset();
+                rec.bind(1, server_).bind(2, ids[i]).bind(3, sids[i]).bind(4, now).run();
+                fleet_id_[ids[i]] = sids[i];
+            }
+            tx.commit();
+        }
+        res_.sessions_pushed += static_cast<std::int64_t>(ids.size());
+        res_.runs += static_cast<std::int64_t>(runs.size());
+        res_.samples += samples;
+        res_.raw_log_bytes += raw_bytes;
+        ++res_.batches;
+        if (o_.progress)
+            o_.progress("sessions " + std::to_string(lo) + ".." + std::to_string(hi) + " -> fleet sessions " + std::to_string(sids.front()) +
+                        ".." + std::to_string(sids.back()) + " committed");
+        return true;
+    }
+
+    void recover_findings() {
+        const std::int64_t have = local_max("synced_discovery_findings", "finding_id");
+        const auto rows = pg_.query("SELECT station_finding_id, finding_id FROM discovery_findings WHERE station_uuid = $1 AND "
+                                    "station_finding_id > $2 ORDER BY station_finding_id",
+                                    {res_.station_uuid, std::to_string(have)});
+        if (rows.empty()) return;
+        Transaction tx(db_);
+        Statement& rec = db_.cached("INSERT INTO synced_discovery_findings(server, finding_id, fleet_finding_id, synced_utc) VALUES (?,?,?,?)");
+        for (const auto& r : rows) {
+            rec.reset();
+            rec.bind(1, server_).bind(2, to_i64(*r[0])).bind(3, to_i64(*r[1])).bind(4, now_iso()).run();
+        }
+        tx.commit();
+    }
+
+    void push_findings() {
+        const std::int64_t after = local_max("synced_discovery_findings", "finding_id");
+        std::vector<StoredDiscoveryFinding> list;
+        std::vector<std::int64_t> local_ids;
+        std::set<std::string> tails;
+        std::map<std::string, std::pair<std::string, std::string>> positions;
+        {
+            Statement st(db_, "SELECT d.finding_id, d.tail_number, d.position, coalesce(p.ata_reference, ''), coalesce(p.description, ''), "
+                              "d.actuator_serial, d.found_utc, d.summary, d.model_json, d.status, d.amends_finding_id, d.tool_version, "
+                              "d.content_sha256 FROM discovery_findings d LEFT JOIN positions p ON p.position = d.position "
+                              "WHERE d.finding_id > ? ORDER BY d.finding_id");
+            st.bind(1, after);
+            while (st.step()) {
+                StoredDiscoveryFinding x;
+                x.finding_id = st.column_int(0);
+                x.tail_number = st.column_text(1);
+                x.position = col_opt_text(st, 2);
+                x.actuator_serial = st.column_text(5);
+                x.found_utc = st.column_text(6);
+                x.summary = st.column_text(7);
+                x.model_json = st.column_text(8);
+                x.status = st.column_text(9);
+                x.amends_finding_id = col_opt_i(st, 10);
+                x.tool_version = st.column_text(11);
+                x.content_sha256 = st.column_text(12);
+                tails.insert(x.tail_number);
+                if (x.position) positions[*x.position] = {st.column_text(3), st.column_text(4)};
+                list.push_back(std::move(x));
+            }
+        }
+        if (list.empty()) return;
+        pg_.exec("BEGIN");
+        register_places(tails, positions);
+        const auto fids = reserve("discovery_findings", "finding_id", list.size());
+        std::unordered_map<std::int64_t, std::int64_t> map;
+        for (std::size_t i = 0; i < list.size(); ++i) map[list[i].finding_id] = fids[i];
+        const auto fleet = [&](std::int64_t local) -> std::int64_t {
+            if (auto it = map.find(local); it != map.end()) return it->second;
+            Statement st(db_, "SELECT fleet_finding_id FROM synced_discovery_findings WHERE server = ? AND finding_id = ?");
+            st.bind(1, server_).bind(2, local);
+            if (!st.step()) throw DbError("discovery finding " + std::to_string(local) + " is not synced yet", DbErrorKind::Invalid);
+            return st.column_int(0);
+        };
+        pg_.copy_in("discovery_findings (finding_id, station_uuid, station_finding_id, tail_number, position, actuator_serial, found_utc, "
+                    "summary, model_json, status, amends_finding_id, tool_version, content_sha256)",
+                    [&](const auto& put) {
+                        for (const auto& x : list)
+                            put(std::to_string(map.at(x.finding_id)) + '\t' + res_.station_uuid + '\t' + std::to_string(x.finding_id) + '\t' +
+                                f(x.tail_number) + '\t' + f(x.position) + '\t' + f(x.actuator_serial) + '\t' + f(x.found_utc) + '\t' +
+                                f(x.summary) + '\t' + f(x.model_json) + '\t' + f(x.status) + '\t' +
+                                (x.amends_finding_id ? std::to_string(fleet(*x.amends_finding_id)) : "\\N") + '\t' + f(x.tool_version) +
+                                '\t' + f(x.content_sha256) + '\n');
+                    });
+        pg_.exec("COMMIT");
+        Transaction tx(db_);
+        Statement& rec = db_.cached("INSERT INTO synced_discovery_findings(server, finding_id, fleet_finding_id, synced_utc) VALUES (?,?,?,?)");
+        for (const auto& x : list) {
+            rec.reset();
+            rec.bind(1, server_).bind(2, x.finding_id).bind(3, map.at(x.finding_id)).bind(4, now_iso()).run();
+        }
+        tx.commit();
+        res_.discovery_findings += static_cast<std::int64_t>(list.size());
+    }
+
+    Database& db_;
+    PgConnection pg_;
+    std::string server_;
+    SyncOptions o_;
+    SyncResult res_;
+    std::unordered_map<std::int64_t, std::int64_t> fleet_id_;
+};
+
+}  // namespace
+
+SyncResult sync_to_fleet(Database& station, const std::string& uri, const SyncOptions& options) {
+    if (options.batch_sessions == 0) throw DbError("sync: a batch holds at least one session", DbErrorKind::Invalid);
+    Syncer s(station, uri, options);
+    return s.run();
+}
+
+}  // namespace emadiag::db

@@ -1,0 +1,182 @@
+#!/usr/bin/env bash
+# The fleet-server tests against the real PostgreSQL server run_pg_tests.sh started (EMADIAG,
+# PGSOCK, PGWORK set by it). Each check prints PASS or FAIL with what it saw; any FAIL fails the run.
+set -uo pipefail
+E="$EMADIAG"
+W="$PGWORK/t"; mkdir -p "$W"; cd "$W"
+fails=0
+pass() { echo "PASS: $*"; }
+fail() { echo "FAIL: $*"; fails=$((fails + 1)); }
+admin() { psql -X -q -At -v ON_ERROR_STOP=1 "postgresql:///${DB:-fleet}?host=$PGSOCK&user=fleet_admin" "$@"; }
+uri() { echo "postgresql:///$1?host=$PGSOCK&user=$2"; }
+export PGPASSFILE="$PGWORK/pgpass"
+umask 077
+: > "$PGPASSFILE"
+
+# ---- the fleet server: schema, two (three) station roles with passwords in PGPASSFILE ----
+DB=postgres admin -c "CREATE DATABASE fleet" -c "CREATE DATABASE fleet1"
+for db in fleet fleet1; do
+  "$E" fleet-server --to "$(uri $db fleet_admin)" --add-station station_a --add-station station_b --add-station station_c \
+    || { echo "FAIL: fleet-server"; exit 1; }
+done
+for r in station_a station_b station_c; do
+  pw="$(head -c 18 /dev/urandom | base64 | tr -d '/+=')"
+  echo "*:*:*:$r:$pw" >> "$PGPASSFILE"
+  DB=postgres admin <<< "ALTER ROLE $r PASSWORD '$pw'"
+  echo "$pw" >> "$PGWORK/passwords"
+done
+
+# ---- station files (simulated ground tests with runs, samples and raw logs) ----
+sim() { "$E" history-sim "$@" --noise typical > /dev/null || { echo "FAIL: history-sim $*"; exit 1; }; }
+sim --db a.db --tail N1EM --position LH-ELEV --sessions 6 --cycles-per-day 4 --fdj-rate-per-100d 0.01 --fsj-rate-per-100d 0.012 --operator OPA --technician "A. Smith" --certificate L-1
+sim --db a.db --tail N1EM --position LH-ELEV --sessions 4 --serial NEW-1 --start-utc 2026-08-01T08:00:00Z --cycles-per-day 4 --cycles 800
+sim --db a.db --tail N2EM --position RH-ELEV --sessions 5 --days-between 20 --fsj-rate-per-100d 0.02
+sim --db b.db --tail N1EM --position RH-ELEV --sessions 6 --cycles-per-day 4 --seed 7
+sim --db c.db --tail N3EM --position LH-AIL --sessions 20 --days-between 5 --seed 3
+# Discovery findings of N1EM (as `emadiag discover --tail` stores them): one open, one closed by a later entry.
+sqlite3 a.db "INSERT INTO discovery_findings(tail_number, position, actuator_serial, found_utc, summary, model_json, status, tool_version, content_sha256)
+  VALUES ('N1EM', 'LH-ELEV', 'NEW-1', '2026-09-01T10:00:00Z', 'Stribeck term: +0.012 N m below 0.5 rad/s; RMS error 0.031 -> 0.012 A', '{}', 'open', 'test', lower(hex(randomblob(32)))),
+         ('N1EM', 'LH-ELEV', 'NEW-1', '2026-09-02T10:00:00Z', 'backlash 0.4 mrad', '{}', 'open', 'test', lower(hex(randomblob(32))));
+  INSERT INTO discovery_findings(tail_number, position, actuator_serial, found_utc, summary, model_json, status, amends_finding_id, tool_version, content_sha256)
+  VALUES ('N1EM', 'LH-ELEV', 'NEW-1', '2026-09-03T10:00:00Z', 'backlash 0.4 mrad: closed, shim replaced', '{}', 'closed', 2, 'test', lower(hex(randomblob(32))))"
+count() { sqlite3 "$1" "SELECT count(*) FROM test_sessions"; }
+
+# ---- 1. a password in the URI is refused and never printed ----
+out="$("$E" sync --db a.db --to "postgresql://station_a:Hunter2Secret@/fleet?host=$PGSOCK" 2>&1)"; rc=$?
+if [ $rc -ne 0 ] && grep -q "carries a password" <<< "$out" && ! grep -q Hunter2Secret <<< "$out"; then
+  pass "a URI with a password is refused without repeating it: $(head -1 <<< "$out" | cut -c1-150)"
+else fail "password URI: rc=$rc: $out"; fi
+
+# ---- 2. two stations sync at once, the same tail N1EM, both land ----
+"$E" sync --db a.db --to "$(uri fleet station_a)" --batch 3 > sync_a.txt 2>&1 & pa=$!
+"$E" sync --db b.db --to "$(uri fleet station_b)" --batch 3 > sync_b.txt 2>&1 & pb=$!
+wait $pa; ra=$?; wait $pb; rb=$?
+cat sync_a.txt sync_b.txt
+na=$(admin -c "SELECT count(*) FROM test_sessions WHERE station_role = 'station_a'")
+nb=$(admin -c "SELECT count(*) FROM test_sessions WHERE station_role = 'station_b'")
+n1=$(admin -c "SELECT count(*) FROM test_sessions WHERE tail_number = 'N1EM'")
+if [ $ra -eq 0 ] && [ $rb -eq 0 ] && [ "$na" = "$(count a.db)" ] && [ "$nb" = "$(count b.db)" ] && [ "$n1" = 16 ]; then
+  pass "concurrent syncs: station_a $na/$(count a.db), station_b $nb/$(count b.db) sessions; tail N1EM has $n1 from both stations"
+else fail "concurrent syncs: rc $ra $rb, station_a $na/$(count a.db), station_b $nb/$(count b.db), N1EM $n1"; fi
+# Everything of every session is there: findings, runs, samples, raw-log bytes per session match the station files.
+server_detail() {
+  admin -c "SELECT s.station_session_id, (SELECT count(*) FROM findings f WHERE f.session_id = s.session_id),
+              (SELECT count(*) FROM runs r WHERE r.session_id = s.session_id),
+              (SELECT count(*) FROM samples x JOIN runs r ON r.run_id = x.run_id WHERE r.session_id = s.session_id),
+              (SELECT coalesce(sum(length(c.content)), 0) FROM raw_log_chunks c JOIN runs r ON r.run_id = c.run_id WHERE r.session_id = s.session_id),
+              s.content_sha256
+            FROM test_sessions s JOIN stations t ON t.station_uuid = s.station_uuid WHERE t.station_uuid = '$(sqlite3 "$1" "SELECT station_uuid FROM station_identity")'
+            ORDER BY 1" | tr '|' ' '
+}
+station_detail() {
+  sqlite3 "$1" "SELECT s.session_id, (SELECT count(*) FROM findings f WHERE f.session_id = s.session_id),
+              (SELECT count(*) FROM runs r WHERE r.session_id = s.session_id),
+              (SELECT count(*) FROM samples x JOIN runs r ON r.run_id = x.run_id WHERE r.session_id = s.session_id),
+              (SELECT coalesce(sum(length(g.content)), 0) FROM raw_logs g JOIN runs r ON r.run_id = g.run_id WHERE r.session_id = s.session_id),
+              s.content_sha256
+            FROM test_sessions s ${2:-} ORDER BY 1" | tr '|' ' '
+}
+for s in a b; do
+  if diff <(station_detail $s.db) <(server_detail $s.db) > /dev/null; then
+    pass "station $s: every session on the server with all its findings, runs, samples and raw-log bytes ($(station_detail $s.db | awk '{f+=$2; r+=$3; x+=$4; b+=$5} END {print NR" sessions, "f" findings, "r" runs, "x" samples, "b" raw-log bytes"}'))"
+  else fail "station $s: server differs: $(diff <(station_detail $s.db) <(server_detail $s.db) | head -5)"; fi
+done
+nd=$(admin -c "SELECT count(*) FROM discovery_findings d JOIN discovery_findings o ON d.amends_finding_id = o.finding_id WHERE o.summary = 'backlash 0.4 mrad'")
+[ "$nd" = 1 ] && pass "discovery findings synced with the closing entry pointing to the one it closes" || fail "discovery findings: $nd"
+ni=$(admin -c "SELECT count(*) FROM installations WHERE tail_number = 'N1EM'")
+[ "$ni" = 3 ] && pass "installations synced: $ni on N1EM (LH-ELEV first serial, LH-ELEV change to NEW-1, RH-ELEV from station b)" || fail "installations: $ni"
+
+# ---- 3. a re-sync inserts nothing twice ----
+out="$("$E" sync --db a.db --to "$(uri fleet station_a)" 2>&1)"; rc=$?
+na2=$(admin -c "SELECT count(*) FROM test_sessions WHERE station_role = 'station_a'")
+if [ $rc -eq 0 ] && grep -q ": 0 session(s) pushed" <<< "$out" && [ "$na2" = "$na" ]; then pass "re-sync pushes nothing: $out"
+else fail "re-sync: rc=$rc $out ($na2 vs $na)"; fi
+
+# ---- 4. kill -9 in the middle of a sync transaction, then re-sync: nothing lost, nothing twice ----
+"$E" sync --db c.db --to "$(uri fleet station_c)" --batch 4 --verbose > sync_c1.txt 2>&1 & pc=$!
+for _ in $(seq 1 200); do
+  [ "$(admin -c "SELECT count(*) FROM test_sessions WHERE station_role = 'station_c'")" -ge 4 ] && break; sleep 0.05
+done
+# Hold the summary table the next batch writes last, so that the sync is caught inside its transaction.
+( admin -c "BEGIN; LOCK TABLE session_measurements IN ACCESS EXCLUSIVE MODE; SELECT pg_sleep(20); COMMIT" > /dev/null 2>&1 ) & plock=$!
+caught=0
+for _ in $(seq 1 200); do
+  if [ "$(admin -c "SELECT count(*) FROM pg_stat_activity WHERE usename = 'station_c' AND wait_event_type = 'Lock'")" -ge 1 ]; then caught=1; break; fi
+  kill -0 $pc 2>/dev/null || break; sleep 0.05
+done
+inflight=$(admin -c "SELECT count(*) FROM pg_stat_activity WHERE usename = 'station_c' AND state = 'active'")
+kill -9 $pc 2>/dev/null; wait $pc 2>/dev/null; rck=$?
+admin -c "SELECT pg_cancel_backend(pid) FROM pg_stat_activity WHERE query LIKE '%pg_sleep(20)%' AND pid <> pg_backend_pid()" > /dev/null
+wait $plock 2>/dev/null
+for _ in $(seq 1 100); do [ "$(admin -c "SELECT count(*) FROM pg_stat_activity WHERE usename = 'station_c'")" = 0 ] && break; sleep 0.05; done
+nc_server=$(admin -c "SELECT count(*) FROM test_sessions WHERE station_role = 'station_c'")
+nc_recorded=$(sqlite3 c.db "SELECT count(*) FROM synced_sessions")
+cat sync_c1.txt
+echo "kill -9: sync caught inside its transaction: $caught (active backend: $inflight), exit status $rck; server has $nc_server of $(count c.db) sessions, station recorded $nc_recorded"
+if [ $caught = 1 ] && [ $rck = 137 ] && [ "$nc_server" -lt "$(count c.db)" ] &&
+   diff <(station_detail c.db "WHERE s.session_id <= $nc_server") <(server_detail c.db) > /dev/null &&
+   [ "$(admin -c "SELECT count(*) FROM session_measurements m JOIN test_sessions s ON s.session_id = m.session_id WHERE s.station_role = 'station_c'")" -le $((nc_server * 4)) ]; then
+  pass "after kill -9 mid-transaction the server holds $nc_server whole sessions and no part of the killed batch"
+else fail "after kill -9: caught=$caught rc=$rck server=$nc_server; $(diff <(station_detail c.db "WHERE s.session_id <= $nc_server") <(server_detail c.db) | head -3)"; fi
+# The other window: the server committed, the station had not yet recorded it (kill between the two).
+sqlite3 c.db "DELETE FROM synced_sessions WHERE session_id > (SELECT max(session_id) - 2 FROM synced_sessions)"
+out="$("$E" sync --db c.db --to "$(uri fleet station_c)" --batch 4 2>&1)"; rc=$?
+echo "$out"
+nc2=$(admin -c "SELECT count(*) FROM test_sessions WHERE station_role = 'station_c'")
+dup=$(admin -c "SELECT count(*) - count(DISTINCT (station_uuid, station_session_id)) FROM test_sessions")
+if [ $rc -eq 0 ] && grep -q "2 already on the server" <<< "$out" && [ "$nc2" = "$(count c.db)" ] && [ "$dup" = 0 ] &&
+   diff <(station_detail c.db) <(server_detail c.db) > /dev/null && [ "$(sqlite3 c.db "SELECT count(*) FROM synced_sessions")" = "$(count c.db)" ]; then
+  pass "re-sync after kill -9: $nc2 of $(count c.db) sessions on the server, each whole, none twice ($dup duplicates); the station records all"
+else fail "re-sync after kill -9: rc=$rc server=$nc2 dup=$dup"; fi
+
+# ---- 5. least privilege: a station cannot alter another station's session (nor its own) ----
+st() { psql -X -q -At "$(uri fleet "$1")" -c "$2" 2>&1; }
+a_sid=$(admin -c "SELECT min(session_id) FROM test_sessions WHERE station_role = 'station_a'")
+b_sid=$(admin -c "SELECT min(session_id) FROM test_sessions WHERE station_role = 'station_b'")
+before=$(admin -c "SELECT md5(string_agg(t::text, '' ORDER BY session_id)) FROM test_sessions t")
+check_refused() {  # what, expected message part, output
+  if grep -q "$2" <<< "$3"; then pass "station_b $1: refused ($(grep -m1 ERROR <<< "$3"))"; else fail "station_b $1 was not refused: $3"; fi
+}
+check_refused "UPDATE of station_a's session" "permission denied" "$(st station_b "UPDATE test_sessions SET verdict = 'SERVICEABLE' WHERE session_id = $a_sid")"
+check_refused "DELETE of station_a's session" "permission denied" "$(st station_b "DELETE FROM test_sessions WHERE session_id = $a_sid")"
+check_refused "DELETE of station_a's findings" "permission denied" "$(st station_b "DELETE FROM findings WHERE session_id = $a_sid")"
+check_refused "TRUNCATE of the findings" "permission denied" "$(st station_b "TRUNCATE findings")"
+check_refused "UPDATE of its own session" "permission denied" "$(st station_b "UPDATE test_sessions SET verdict = 'SERVICEABLE' WHERE session_id = $b_sid")"
+check_refused "UPDATE of the fleet summary" "permission denied" "$(st station_b "UPDATE series_stats SET n = 0")"
+check_refused "INSERT of a finding into station_a's session" "violates foreign key" \
+  "$(st station_b "INSERT INTO findings(session_id, parameter, estimator, limit_kind, status) VALUES ($a_sid, 'X', 'physics', 'none', 'WITHIN')")"
+check_refused "INSERT of a finding into station_a's session posing as station_a" "permission denied" \
+  "$(st station_b "INSERT INTO findings(session_id, station_role, parameter, estimator, limit_kind, status) VALUES ($a_sid, 'station_a', 'X', 'physics', 'none', 'WITHIN')")"
+check_refused "INSERT of a session under station_a's station identity" "violates foreign key constraint \"test_sessions_station_uuid_station_role_fkey\"" \
+  "$(st station_b "INSERT INTO test_sessions(session_uuid, station_uuid, station_session_id, tail_number, phase, started_utc, verdict, prev_sha256, content_sha256) SELECT gen_random_uuid(), station_uuid, 999999, 'N1EM', 'pre-flight', '2027-01-01T00:00:00Z', 'SERVICEABLE', '', repeat('0', 64) FROM stations WHERE station_role = 'station_a'")"
+after=$(admin -c "SELECT md5(string_agg(t::text, '' ORDER BY session_id)) FROM test_sessions t")
+reads=$(st station_b "SELECT count(*) FROM test_sessions")
+[ "$before" = "$after" ] && [ "$reads" = "$(admin -c "SELECT count(*) FROM test_sessions")" ] &&
+  pass "the sessions are unchanged; station_b reads the whole fleet ($reads sessions)" || fail "sessions changed or not readable ($reads)"
+if grep -rqF -f "$PGWORK/passwords" "$PGWORK"/server.log sync_*.txt 2>/dev/null; then fail "a password appears in a log"; else pass "no password in the server log or the sync output"; fi
+
+# ---- 6. report, fleet and trend print the same from PostgreSQL as from SQLite, byte for byte ----
+"$E" sync --db a.db --to "$(uri fleet1 station_a)" > /dev/null || fail "sync to fleet1"
+U="$(uri fleet1 station_a)"
+same() {  # label, then the command's arguments after --db
+  local label="$1"; shift
+  local cmd="$1"; shift
+  local lite pgout
+  lite="$("$E" "$cmd" --db a.db "$@" 2>&1)" || { fail "$label from SQLite: $lite"; return; }
+  pgout="$("$E" "$cmd" --db "$U" "$@" 2>&1)" || { fail "$label from PostgreSQL: $pgout"; return; }
+  lite="${lite//"a.db"/"$U"}"  # the one difference: the database is named as given
+  if [ "$lite" = "$pgout" ]; then pass "$label: byte for byte the same ($(wc -c <<< "$pgout") bytes)"
+  else fail "$label differs:"; diff <(echo "$lite") <(echo "$pgout") | head -10; fi
+}
+for fmt in text json csv; do
+  same "report N1EM --format $fmt" report --tail N1EM --format "$fmt" --draws 500
+  same "report N2EM --format $fmt" report --tail N2EM --format "$fmt" --draws 500
+  same "fleet --format $fmt" fleet --format "$fmt" --draws 500
+done
+same "trend N1EM text" trend --tail N1EM --phase all --draws 500
+same "trend N2EM json" trend --tail N2EM --format json --draws 500
+out="$("$E" report --db "$U" --tail N9ZZ 2>&1)"; rc=$?
+[ $rc -ne 0 ] && grep -q "is not in" <<< "$out" && pass "an unknown tail from PostgreSQL: $(head -1 <<< "$out" | cut -c1-120)" || fail "unknown tail: $out"
+
+echo "pg_tests: $fails failure(s)"
+[ $fails -eq 0 ]

@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# The fleet server at scale: builds the synthetic fleet's station file with fleet_scale_bench
+# (TAILS x 4 positions x 2 sessions/day x DAYS; 1000 730 is the 5.84 million sessions of issue 11),
+# starts a temporary PostgreSQL server (run_pg_tests.sh --run), and runs pg_scale_bench: sync rate,
+# database size, report and fleet times from the server.
+#   scripts/pg/run_pg_bench.sh [TAILS [DAYS [BUILD_DIR]]]     (defaults 1000 730 build)
+set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+root="$(cd "$here/../.." && pwd)"
+tails="${1:-1000}"; days="${2:-730}"; build="$(readlink -f "${3:-$root/build}")"
+if [ -z "${PGSOCK:-}" ]; then
+  exec "$here/run_pg_tests.sh" "$build/src/emadiag" --run bash "$0" "$tails" "$days" "$build"
+fi
+station="$PGWORK/station.db"
+chmod 755 "$PGWORK"
+"$build/bench/fleet_scale_bench" "$tails" "$days" "$station" | grep -E "^(fleet_scale_bench|ingest|database)"
+psql -X -q "postgresql:///postgres?host=$PGSOCK&user=fleet_admin" -c "CREATE DATABASE fleet"
+"$EMADIAG" fleet-server --to "postgresql:///fleet?host=$PGSOCK&user=fleet_admin" --add-station station_bench > /dev/null
+pw="$(head -c 18 /dev/urandom | base64 | tr -d '/+=')"
+export PGPASSFILE="$PGWORK/pgpass"; (umask 077; echo "*:*:*:station_bench:$pw" > "$PGPASSFILE")
+psql -X -q "postgresql:///postgres?host=$PGSOCK&user=fleet_admin" <<< "ALTER ROLE station_bench PASSWORD '$pw'"
+"$build/bench/pg_scale_bench" "$station" "postgresql:///fleet?host=$PGSOCK&user=station_bench" "${PG_BENCH_BATCH:-10000}" F-W0000 \
+  "postgresql:///fleet?host=$PGSOCK&user=fleet_admin"
+# The server's CPU (its backends, ended by now; the machine may be shared, so wall times also count waiting).
+pm="$(head -1 "$PGWORK/data/postmaster.pid")"
+awk -v hz="$(getconf CLK_TCK)" '{printf "server CPU        : %.1f s (backends, user + system)\n", ($16 + $17) / hz}' "/proc/$pm/stat"
