@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # README command (b): set up, build, and pass every test:
-#   1. Release build (GCC): unit tests, the HTML report in headless Chromium, the storage faults
+#   1. Release build (GCC): unit tests, the HTML report in headless Chromium, the fleet server on a
+#      real PostgreSQL server, the storage faults
 #      (kill -9 of history-sim, import and test-run, full disk), the vcan suite (inside user-mode
 #      Linux when this kernel has no vcan), the main job (quick counts), a small fleet-scale run;
 #   2. the sanitizer build (clang, ASan + UBSan, libFuzzer coverage; scripts/build.sh asan): every
@@ -39,6 +40,8 @@ stage "unit tests (release)"
 ctest --test-dir build -L unit -j "$(nproc)" --output-on-failure
 stage "the HTML report in a real browser (headless Chromium)"
 ctest --test-dir build -L browser --output-on-failure
+stage "the fleet server: a real PostgreSQL server (sync, kill -9 mid-sync, privileges, reports byte for byte)"
+ctest --test-dir build -L postgres --output-on-failure
 stage "storage under faults (kill -9 x 50 of history-sim and of import, full tmpfs)"
 scripts/storage/run_storage_faults.sh build 50
 stage "vcan tests (real SocketCAN on vcan0)"
