@@ -435,10 +435,21 @@ TEST_F(StorageFaults, BoundedOpenCheckFindsATruncatedFile) {
         for (int i = 0; i < 3; ++i) (void)db::store_test_session(d, example_session(i));
     }
     fs::resize_file(path_, fs::file_size(path_) - 4096);
-    db::Database d(path_, db::Database::kDefaultBusyTimeoutMs, false);
-    const auto problems = d.integrity_problems(db::Database::IntegrityScope::Open);
-    ASSERT_FALSE(problems.empty());
-    EXPECT_THAT(problems.front(), HasSubstr("truncated"));
+    const std::string before = file_bytes(path_);
+    // Opened without the check at open, SQLite itself may already refuse the file (it compares the
+    // header's page count with the file); else the bounded check names the truncation.
+    std::vector<std::string> problems;
+    try {
+        db::Database d(path_, db::Database::kDefaultBusyTimeoutMs, false);
+        problems = d.integrity_problems(db::Database::IntegrityScope::Open);
+        ASSERT_FALSE(problems.empty());
+        EXPECT_THAT(problems.front(), HasSubstr("truncated"));
+    } catch (const db::DbError& e) {
+        EXPECT_EQ(e.kind(), db::DbErrorKind::Corrupt) << e.what();
+    }
+    // And the normal open refuses it.
+    EXPECT_THAT([&] { db::Database d(path_); }, ::testing::ThrowsMessage<db::DbError>(HasSubstr("corrupt or truncated")));
+    EXPECT_EQ(file_bytes(path_), before);
 }
 
 TEST_F(StorageFaults, BoundedOpenCheckFindsACorruptSummaryPage) {
