@@ -22,6 +22,9 @@ inline constexpr const char* kSeriesStatsColumns =
 [[nodiscard]] std::optional<SeriesStats> find_series_stats(Database& db, const std::string& tail_number, const std::string& position,
                                                            const std::string& actuator_serial, const std::string& parameter);
 
+/// The position_status row of a tail and position, if stored (a statement cached on the connection).
+[[nodiscard]] std::optional<PositionStatus> find_position_status(Database& db, const std::string& tail_number, const std::string& position);
+
 /// Maps a failed SQLite call to a DbError of the right kind, naming the database and the cause.
 [[noreturn]] void throw_sqlite_error(Database& db, int rc, const std::string& what);
 

@@ -64,6 +64,22 @@ StoredInstallation read_installation(Columns& c) {
     return i;
 }
 
+constexpr const char* kPositionStatusColumns =
+    "tail_number, position, actuator_serial, sessions, last_session_id, last_utc, last_verdict, last_cycles";
+
+PositionStatus read_position_status(Columns& c) {
+    PositionStatus p;
+    p.tail_number = c.text();
+    p.position = c.text();
+    p.actuator_serial = c.text();
+    p.sessions = c.integer();
+    p.last_session_id = c.integer();
+    p.last_utc = c.text();
+    p.last_verdict = c.text();
+    p.last_cycles = c.optional_integer();
+    return p;
+}
+
 SeriesStats read_series_stats(Columns& c) {
     SeriesStats s;
     s.tail_number = c.text();
@@ -213,20 +229,17 @@ std::vector<StoredDiscoveryFinding> list_discovery_findings(Database& db, const 
 }
 
 std::vector<PositionStatus> list_position_status(Database& db) {
-    Statement st(db, "SELECT tail_number, position, actuator_serial, sessions, last_session_id, last_utc, last_verdict, last_cycles "
-                     "FROM position_status ORDER BY tail_number, position");
-    return collect(st, [](Columns& c) {
-        PositionStatus p;
-        p.tail_number = c.text();
-        p.position = c.text();
-        p.actuator_serial = c.text();
-        p.sessions = c.integer();
-        p.last_session_id = c.integer();
-        p.last_utc = c.text();
-        p.last_verdict = c.text();
-        p.last_cycles = c.optional_integer();
-        return p;
-    });
+    Statement st(db, std::string("SELECT ") + kPositionStatusColumns + " FROM position_status ORDER BY tail_number, position");
+    return collect(st, read_position_status);
+}
+
+std::optional<PositionStatus> detail::find_position_status(Database& db, const std::string& tail_number, const std::string& position) {
+    Statement& st = db.cached(std::string("SELECT ") + kPositionStatusColumns + " FROM position_status WHERE tail_number = ? AND position = ?");
+    st.bind(1, tail_number).bind(2, position);
+    std::vector<PositionStatus> rows = collect(st, read_position_status);
+    st.reset();
+    if (rows.empty()) return std::nullopt;
+    return std::move(rows.front());
 }
 
 std::vector<SeriesStats> list_series_stats(Database& db, const std::optional<std::string>& tail_number) {

@@ -343,25 +343,7 @@ std::optional<SeriesStats>& series_row(Database& db, Batch& b, const std::string
 
 std::optional<PositionStatus>& position_row(Database& db, Batch& b, const std::string& tail, const std::string& position) {
     auto [it, fresh] = b.positions.try_emplace({tail, position});
-    if (fresh) {
-        Statement& st = db.cached(
-            "SELECT actuator_serial, sessions, last_session_id, last_utc, last_verdict, last_cycles FROM position_status "
-            "WHERE tail_number = ? AND position = ?");
-        st.bind(1, tail).bind(2, position);
-        if (st.step()) {
-            PositionStatus p;
-            p.tail_number = tail;
-            p.position = position;
-            p.actuator_serial = st.column_text(0);
-            p.sessions = st.column_int(1);
-            p.last_session_id = st.column_int(2);
-            p.last_utc = st.column_text(3);
-            p.last_verdict = st.column_text(4);
-            if (!st.column_is_null(5)) p.last_cycles = st.column_int(5);
-            it->second = std::move(p);
-        }
-        st.reset();
-    }
+    if (fresh) it->second = detail::find_position_status(db, tail, position);
     return it->second;
 }
 
