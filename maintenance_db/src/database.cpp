@@ -8,6 +8,7 @@
 
 #include <sqlite3.h>
 
+#include <filesystem>
 #include <fstream>
 
 namespace emadiag::db {
@@ -18,6 +19,9 @@ constexpr char kSqliteHeader[] = "SQLite format 3";  // + its NUL: 16 bytes
 constexpr std::size_t kSqliteHeaderBytes = 16;
 /// The schema version whose migration is followed by the sealing of earlier sessions (hash chain).
 constexpr int kSealVersion = 3;
+/// The tables a store updates in place (upserts) and the small ones it reads before writing: the
+/// bounded check at open reads them whole (IntegrityScope::Open).
+constexpr const char* kTablesUpdatedInPlace[] = {"aircraft", "positions", "chain_heads", "series_stats", "position_status"};
 /// The page cache of a connection, KiB.
 constexpr int kCacheSizeKiB = 256 * 1024;
 
@@ -84,6 +88,9 @@ Database::Database(const std::string& path, int busy_timeout_ms, bool quick_chec
     }
     sqlite3_busy_timeout(db_, busy_timeout_ms);
     try {
+        // Every b-tree page is sanity-checked as it is read: a write that meets a corrupt page fails
+        // (SQLITE_CORRUPT) and its transaction rolls back instead of building on it.
+        exec("PRAGMA cell_size_check = ON");
         if (!in_memory && quick_check) check_before_write();
         // Off while migrating: version 3 rebuilds test_sessions, which other tables reference.
         exec("PRAGMA foreign_keys = OFF");
@@ -123,31 +130,93 @@ void Database::check_before_write() {
                           "emadiag needs to write to it: copy it to a writable place or fix the permissions",
                       DbErrorKind::ReadOnly);
     }
-    sqlite3_stmt* st = nullptr;
-    int rc = sqlite3_prepare_v2(db_, "PRAGMA quick_check", -1, &st, nullptr);
-    std::string problems;
-    int lines = 0;
-    while (rc == SQLITE_OK || rc == SQLITE_ROW) {
-        rc = sqlite3_step(st);
-        if (rc != SQLITE_ROW) break;
-        const auto* text = reinterpret_cast<const char*>(sqlite3_column_text(st, 0));
-        const std::string line = text != nullptr ? text : "";
-        if (line == "ok") continue;
-        if (++lines <= 3) problems += (problems.empty() ? "" : "; ") + line;
+    std::error_code ec;
+    const auto bytes = std::filesystem::file_size(path_, ec);
+    const IntegrityScope scope = !ec && bytes > kFullCheckMaxBytes ? IntegrityScope::Open : IntegrityScope::Full;
+    std::vector<std::string> problems;
+    try {
+        problems = integrity_problems(scope, 3);
+    } catch (const DbError& e) {
+        std::string inner = e.what();
+        if (const std::string tag = "[maintenance_db] "; inner.rfind(tag, 0) == 0) inner.erase(0, tag.size());
+        throw DbError("database " + path_ + " is corrupt or truncated and was not opened, or cannot be checked before use: " + inner +
+                          "; it is left untouched",
+                      e.kind() == DbErrorKind::Other ? DbErrorKind::Corrupt : e.kind());
     }
-    const std::string err = sqlite3_errmsg(db_);
-    sqlite3_finalize(st);
-    if (rc != SQLITE_DONE && rc != SQLITE_OK) {
-        const DbErrorKind kind = kind_of(rc) == DbErrorKind::Other ? DbErrorKind::Corrupt : kind_of(rc);
-        throw DbError("database " + path_ + " is corrupt or truncated and was not opened, or cannot be checked before use (" +
-                          cause_of(kind, busy_timeout_ms_) + "): " + err + "; it is left untouched",
-                      kind);
-    }
-    if (lines > 0) {
-        throw DbError("database " + path_ + " is corrupt or truncated and was not opened (nothing was written to it; PRAGMA quick_check: " +
-                          problems + (lines > 3 ? "; ..." : "") + "); it is left untouched: restore it from a backup",
+    if (!problems.empty()) {
+        std::string list;
+        for (const auto& p : problems) list += (list.empty() ? "" : "; ") + p;
+        throw DbError("database " + path_ + " is corrupt or truncated and was not opened (nothing was written to it; " +
+                          (scope == IntegrityScope::Full ? "PRAGMA quick_check" : "check at open") + ": " + list +
+                          "); it is left untouched: restore it from a backup",
                       DbErrorKind::Corrupt);
     }
+}
+
+namespace {
+/// Big-endian unsigned integer of `n` bytes at `at`.
+std::uint64_t big_endian(const std::string& b, std::size_t at, std::size_t n) {
+    std::uint64_t v = 0;
+    for (std::size_t i = 0; i < n; ++i) v = (v << 8) | static_cast<unsigned char>(b[at + i]);
+    return v;
+}
+}  // namespace
+
+std::vector<std::string> Database::integrity_problems(IntegrityScope scope, int max_problems) {
+    std::vector<std::string> problems;
+    const auto add = [&](const std::string& p) {
+        if (static_cast<int>(problems.size()) < max_problems) problems.push_back(p);
+    };
+    std::vector<std::string> statements;
+    if (scope == IntegrityScope::Full) {
+        statements.emplace_back("PRAGMA quick_check(" + std::to_string(max_problems) + ")");
+    } else {
+        statements.emplace_back("SELECT count(*) FROM sqlite_schema");  // reads and parses the schema
+        // Only the tables this database has (an old version lacks the summary tables until migrated).
+        for (const char* table : kTablesUpdatedInPlace) {
+            Statement has(*this, "SELECT 1 FROM sqlite_schema WHERE type = 'table' AND name = ?");
+            has.bind(1, std::string(table));
+            if (has.step()) statements.emplace_back(std::string("PRAGMA quick_check(") + table + ")");
+        }
+    }
+    for (const auto& sql : statements) {
+        sqlite3_stmt* st = nullptr;
+        int rc = sqlite3_prepare_v2(db_, sql.c_str(), -1, &st, nullptr);
+        while (rc == SQLITE_OK || rc == SQLITE_ROW) {
+            rc = sqlite3_step(st);
+            if (rc != SQLITE_ROW) break;
+            const auto* text = reinterpret_cast<const char*>(sqlite3_column_text(st, 0));
+            const std::string line = text != nullptr ? text : "";
+            if (sql.rfind("PRAGMA", 0) == 0 && line != "ok") add(line);
+        }
+        const std::string err = sqlite3_errmsg(db_);
+        sqlite3_finalize(st);
+        if (rc != SQLITE_DONE && rc != SQLITE_OK) {
+            const DbErrorKind kind = kind_of(rc);
+            throw DbError(sql + ": " + (cause_of(kind, busy_timeout_ms_).empty() ? "" : cause_of(kind, busy_timeout_ms_) + ": ") + err, kind);
+        }
+    }
+    if (scope == IntegrityScope::Open && path_ != ":memory:" && !path_.empty()) {
+        // After the reads above (which roll back a hot journal left by a crash, restoring the header):
+        // the header (sqlite.org/fileformat.html 1.3): page size at 16, change counter at 24, page
+        // count at 28, valid when the version-valid-for number at 92 equals the change counter.
+        std::ifstream in(path_, std::ios::binary);
+        std::string head(100, '\0');
+        in.read(head.data(), static_cast<std::streamsize>(head.size()));
+        std::error_code ec;
+        const auto bytes = std::filesystem::file_size(path_, ec);
+        if (in.gcount() == 100 && !ec) {
+            std::uint64_t page_size = big_endian(head, 16, 2);
+            if (page_size == 1) page_size = 65536;
+            const std::uint64_t pages = big_endian(head, 28, 4);
+            const bool valid = big_endian(head, 24, 4) == big_endian(head, 92, 4);
+            if (page_size < 512 || (page_size & (page_size - 1)) != 0) add("page size " + std::to_string(page_size) + " in the header is not valid");
+            else if (valid && pages * page_size > bytes)
+                add("the header records " + std::to_string(pages) + " pages of " + std::to_string(page_size) + " bytes, the file holds " +
+                    std::to_string(bytes) + " bytes: truncated");
+        }
+    }
+    return problems;
 }
 
 void Database::exec(std::string_view sql) {

@@ -8,8 +8,12 @@ std::vector<std::string> SqliteRecordSource::tail_numbers() {
     while (st.step()) tails.push_back(st.column_text(0));
     return tails;
 }
-std::vector<StoredTestSession> SqliteRecordSource::sessions_of_tail(const std::string& t) { return list_test_sessions(db_, t); }
-std::vector<StoredTestSession> SqliteRecordSource::sessions_of_serial(const std::string& s) { return list_sessions_of_serial(db_, s); }
+std::vector<StoredTestSession> SqliteRecordSource::sessions_of_tail(const std::string& t, const SessionListParts& parts) {
+    return list_test_sessions(db_, t, parts);
+}
+std::vector<StoredTestSession> SqliteRecordSource::sessions_of_serial(const std::string& s, const SessionListParts& parts) {
+    return list_sessions_of_serial(db_, s, parts);
+}
 bool SqliteRecordSource::serial_seen_elsewhere(const std::string& serial, const std::string& tail) {
     Statement st(db_, "SELECT 1 FROM test_sessions WHERE actuator_serial = ? AND tail_number != ? LIMIT 1");
     st.bind(1, serial).bind(2, tail);

@@ -3,40 +3,103 @@
 #include "emadiag/db/db_error.hpp"
 #include "emadiag/db/sha256.hpp"
 
+#include "record_detail.hpp"
 #include "run_store_detail.hpp"
 
 #include <algorithm>
+#include <utility>
 
 namespace emadiag::db {
 namespace {
 
 void invalid(const std::string& message) { throw DbError(message, DbErrorKind::Invalid); }
 
-std::optional<std::string> optional_text(const Statement& st, int col) {
-    return st.column_is_null(col) ? std::nullopt : std::optional<std::string>(st.column_text(col));
-}
-std::optional<double> optional_double(const Statement& st, int col) {
-    return st.column_is_null(col) ? std::nullopt : std::optional<double>(st.column_double(col));
-}
-std::optional<std::int64_t> optional_int(const Statement& st, int col) {
-    return st.column_is_null(col) ? std::nullopt : std::optional<std::int64_t>(st.column_int(col));
+/// Reads a result row's columns left to right: each call takes the next column, so a reader lists
+/// the fields in the order of its SELECT without numbering them.
+class Columns {
+public:
+    explicit Columns(const Statement& st) : st_(st) {}
+    std::string text() { return st_.column_text(col_++); }
+    std::int64_t integer() { return st_.column_int(col_++); }
+    double real() { return st_.column_double(col_++); }
+    std::optional<std::string> optional_text() { return st_.column_is_null(col_) ? skip<std::string>() : std::optional<std::string>(text()); }
+    std::optional<std::int64_t> optional_integer() { return st_.column_is_null(col_) ? skip<std::int64_t>() : std::optional<std::int64_t>(integer()); }
+    std::optional<double> optional_real() { return st_.column_is_null(col_) ? skip<double>() : std::optional<double>(real()); }
+
+private:
+    template <class T>
+    std::optional<T> skip() {
+        ++col_;
+        return std::nullopt;
+    }
+    const Statement& st_;
+    int col_ = 0;
+};
+
+/// Every row of a bound statement, each read by `read(Columns&)`: the one query loop of this file.
+template <class Read>
+auto collect(Statement& st, Read read) {
+    std::vector<decltype(read(std::declval<Columns&>()))> out;
+    while (st.step()) {
+        Columns c(st);
+        out.push_back(read(c));
+    }
+    return out;
 }
 
 constexpr const char* kInstallationColumns =
     "installation_id, tail_number, position, from_serial, to_serial, detected_utc, cycles, hours_h, session_id FROM installations";
 
-StoredInstallation read_installation(const Statement& st) {
+StoredInstallation read_installation(Columns& c) {
     StoredInstallation i;
-    i.installation_id = st.column_int(0);
-    i.tail_number = st.column_text(1);
-    i.position = st.column_text(2);
-    i.from_serial = st.column_text(3);
-    i.to_serial = st.column_text(4);
-    i.detected_utc = st.column_text(5);
-    i.cycles = optional_int(st, 6);
-    i.hours_h = optional_double(st, 7);
-    i.session_id = st.column_int(8);
+    i.installation_id = c.integer();
+    i.tail_number = c.text();
+    i.position = c.text();
+    i.from_serial = c.text();
+    i.to_serial = c.text();
+    i.detected_utc = c.text();
+    i.cycles = c.optional_integer();
+    i.hours_h = c.optional_real();
+    i.session_id = c.integer();
     return i;
+}
+
+constexpr const char* kPositionStatusColumns =
+    "tail_number, position, actuator_serial, sessions, last_session_id, last_utc, last_verdict, last_cycles";
+
+PositionStatus read_position_status(Columns& c) {
+    PositionStatus p;
+    p.tail_number = c.text();
+    p.position = c.text();
+    p.actuator_serial = c.text();
+    p.sessions = c.integer();
+    p.last_session_id = c.integer();
+    p.last_utc = c.text();
+    p.last_verdict = c.text();
+    p.last_cycles = c.optional_integer();
+    return p;
+}
+
+SeriesStats read_series_stats(Columns& c) {
+    SeriesStats s;
+    s.tail_number = c.text();
+    s.position = c.text();
+    s.actuator_serial = c.text();
+    s.parameter = c.text();
+    s.n = c.integer();
+    s.first_days = c.real();
+    s.last_days = c.real();
+    for (double* sum : {&s.s_w, &s.s_wt, &s.s_wtt, &s.s_wy, &s.s_wty, &s.s_wyy}) *sum = c.real();
+    s.n_cycles = c.integer();
+    s.first_cycles = c.optional_real();
+    s.last_cycles = c.optional_real();
+    for (double* sum : {&s.c_w, &s.c_wt, &s.c_wtt, &s.c_wy, &s.c_wty, &s.c_wyy}) *sum = c.real();
+    s.last_session_id = c.integer();
+    s.last_value = c.real();
+    s.last_std_error = c.real();
+    s.limit_kind = c.text();
+    s.limit_value = c.optional_real();
+    return s;
 }
 
 std::string discovery_sha256(const StoredDiscoveryFinding& f) {
@@ -61,26 +124,20 @@ std::string discovery_sha256(const StoredDiscoveryFinding& f) {
 
 std::vector<StoredPosition> list_positions(Database& db) {
     Statement st(db, "SELECT position, ata_reference, description FROM positions ORDER BY position");
-    std::vector<StoredPosition> out;
-    while (st.step()) out.push_back({st.column_text(0), st.column_text(1), st.column_text(2)});
-    return out;
+    return collect(st, [](Columns& c) { return StoredPosition{c.text(), c.text(), c.text()}; });
 }
 
 std::vector<StoredInstallation> list_installations(Database& db, const std::string& tail_number) {
     check_tail_number(tail_number);
     Statement st(db, std::string("SELECT ") + kInstallationColumns + " WHERE tail_number = ? ORDER BY installation_id");
     st.bind(1, tail_number);
-    std::vector<StoredInstallation> out;
-    while (st.step()) out.push_back(read_installation(st));
-    return out;
+    return collect(st, read_installation);
 }
 
 std::vector<StoredInstallation> list_installations_of_serial(Database& db, const std::string& actuator_serial) {
     Statement st(db, std::string("SELECT ") + kInstallationColumns + " WHERE to_serial = ? OR from_serial = ? ORDER BY installation_id");
     st.bind(1, actuator_serial).bind(2, actuator_serial);
-    std::vector<StoredInstallation> out;
-    while (st.step()) out.push_back(read_installation(st));
-    return out;
+    return collect(st, read_installation);
 }
 
 std::int64_t store_discovery_finding(Database& db, const StoredDiscoveryFinding& finding) {
@@ -152,89 +209,64 @@ std::vector<StoredDiscoveryFinding> list_discovery_findings(Database& db, const 
                                     : "") +
                          " ORDER BY d.found_utc, d.finding_id");
     st.bind(1, tail_number);
-    std::vector<StoredDiscoveryFinding> out;
-    while (st.step()) {
+    return collect(st, [](Columns& c) {
         StoredDiscoveryFinding f;
-        f.finding_id = st.column_int(0);
-        f.tail_number = st.column_text(1);
-        f.position = optional_text(st, 2);
-        f.position_ata = st.column_text(3);
-        f.position_description = st.column_text(4);
-        f.actuator_serial = st.column_text(5);
-        f.found_utc = st.column_text(6);
-        f.summary = st.column_text(7);
-        f.model_json = st.column_text(8);
-        f.status = st.column_text(9);
-        f.amends_finding_id = optional_int(st, 10);
-        f.tool_version = st.column_text(11);
-        f.content_sha256 = st.column_text(12);
-        out.push_back(std::move(f));
-    }
-    return out;
+        f.finding_id = c.integer();
+        f.tail_number = c.text();
+        f.position = c.optional_text();
+        f.position_ata = c.text();
+        f.position_description = c.text();
+        f.actuator_serial = c.text();
+        f.found_utc = c.text();
+        f.summary = c.text();
+        f.model_json = c.text();
+        f.status = c.text();
+        f.amends_finding_id = c.optional_integer();
+        f.tool_version = c.text();
+        f.content_sha256 = c.text();
+        return f;
+    });
 }
 
 std::vector<PositionStatus> list_position_status(Database& db) {
-    Statement st(db, "SELECT tail_number, position, actuator_serial, sessions, last_session_id, last_utc, last_verdict, last_cycles "
-                     "FROM position_status ORDER BY tail_number, position");
-    std::vector<PositionStatus> out;
-    while (st.step()) {
-        out.push_back({st.column_text(0), st.column_text(1), st.column_text(2), st.column_int(3), st.column_int(4), st.column_text(5),
-                       st.column_text(6), optional_int(st, 7)});
-    }
-    return out;
+    Statement st(db, std::string("SELECT ") + kPositionStatusColumns + " FROM position_status ORDER BY tail_number, position");
+    return collect(st, read_position_status);
+}
+
+std::optional<PositionStatus> detail::find_position_status(Database& db, const std::string& tail_number, const std::string& position) {
+    Statement& st = db.cached(std::string("SELECT ") + kPositionStatusColumns + " FROM position_status WHERE tail_number = ? AND position = ?");
+    st.bind(1, tail_number).bind(2, position);
+    std::vector<PositionStatus> rows = collect(st, read_position_status);
+    st.reset();
+    if (rows.empty()) return std::nullopt;
+    return std::move(rows.front());
 }
 
 std::vector<SeriesStats> list_series_stats(Database& db, const std::optional<std::string>& tail_number) {
-    Statement st(db, std::string("SELECT tail_number, position, actuator_serial, parameter, n, first_days, last_days, s_w, s_wt, s_wtt, "
-                                 "s_wy, s_wty, s_wyy, n_cycles, first_cycles, last_cycles, c_w, c_wt, c_wtt, c_wy, c_wty, c_wyy, "
-                                 "last_session_id, last_value, last_std_error, limit_kind, limit_value FROM series_stats") +
-                         (tail_number ? " WHERE tail_number = ?" : "") + " ORDER BY tail_number, position, actuator_serial, parameter");
+    Statement st(db, std::string("SELECT ") + detail::kSeriesStatsColumns + " FROM series_stats" + (tail_number ? " WHERE tail_number = ?" : "") +
+                         " ORDER BY tail_number, position, actuator_serial, parameter");
     if (tail_number) st.bind(1, *tail_number);
-    std::vector<SeriesStats> out;
-    while (st.step()) {
-        SeriesStats s;
-        s.tail_number = st.column_text(0);
-        s.position = st.column_text(1);
-        s.actuator_serial = st.column_text(2);
-        s.parameter = st.column_text(3);
-        s.n = st.column_int(4);
-        s.first_days = st.column_double(5);
-        s.last_days = st.column_double(6);
-        s.s_w = st.column_double(7);
-        s.s_wt = st.column_double(8);
-        s.s_wtt = st.column_double(9);
-        s.s_wy = st.column_double(10);
-        s.s_wty = st.column_double(11);
-        s.s_wyy = st.column_double(12);
-        s.n_cycles = st.column_int(13);
-        s.first_cycles = optional_double(st, 14);
-        s.last_cycles = optional_double(st, 15);
-        s.c_w = st.column_double(16);
-        s.c_wt = st.column_double(17);
-        s.c_wtt = st.column_double(18);
-        s.c_wy = st.column_double(19);
-        s.c_wty = st.column_double(20);
-        s.c_wyy = st.column_double(21);
-        s.last_session_id = st.column_int(22);
-        s.last_value = st.column_double(23);
-        s.last_std_error = st.column_double(24);
-        s.limit_kind = st.column_text(25);
-        s.limit_value = optional_double(st, 26);
-        out.push_back(std::move(s));
-    }
-    return out;
+    return collect(st, read_series_stats);
+}
+
+std::optional<SeriesStats> detail::find_series_stats(Database& db, const std::string& tail_number, const std::string& position,
+                                                     const std::string& actuator_serial, const std::string& parameter) {
+    Statement& st = db.cached(std::string("SELECT ") + kSeriesStatsColumns +
+                              " FROM series_stats WHERE tail_number = ? AND position = ? AND actuator_serial = ? AND parameter = ?");
+    st.bind(1, tail_number).bind(2, position).bind(3, actuator_serial).bind(4, parameter);
+    std::vector<SeriesStats> rows = collect(st, read_series_stats);
+    st.reset();
+    if (rows.empty()) return std::nullopt;
+    return std::move(rows.front());
 }
 
 ChainCheck verify_tail(Database& db, const std::string& tail_number) {
     check_tail_number(tail_number);
     ChainCheck out;
     out.tail_number = tail_number;
-    std::vector<std::int64_t> ids;
-    {
-        Statement st(db, "SELECT session_id FROM test_sessions WHERE tail_number = ? ORDER BY session_id");
-        st.bind(1, tail_number);
-        while (st.step()) ids.push_back(st.column_int(0));
-    }
+    Statement of_tail(db, "SELECT session_id FROM test_sessions WHERE tail_number = ? ORDER BY session_id");
+    of_tail.bind(1, tail_number);
+    const std::vector<std::int64_t> ids = collect(of_tail, [](Columns& c) { return c.integer(); });
     std::string prev;
     for (const auto id : ids) {
         const StoredTestSession s = load_test_session(db, id);

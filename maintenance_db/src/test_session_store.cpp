@@ -13,6 +13,7 @@
 #include <charconv>
 #include <cmath>
 #include <map>
+#include <tuple>
 #include <unordered_map>
 #include <string_view>
 
@@ -223,7 +224,8 @@ std::vector<StoredArtifact> load_artifacts(Database& db, std::int64_t session_id
 
 /// The sessions matching `where` (on alias s, one bound text), oldest first, with findings,
 /// artifacts and runs without samples: one query per table, not per session.
-std::vector<StoredTestSession> list_where(Database& db, const std::string& where, const std::string& value) {
+std::vector<StoredTestSession> list_where(Database& db, const std::string& where, const std::string& value,
+                                          const SessionListParts& parts = {}) {
     std::vector<StoredTestSession> out;
     std::unordered_map<std::int64_t, std::size_t> index;
     {
@@ -245,12 +247,13 @@ std::vector<StoredTestSession> list_where(Database& db, const std::string& where
             std::sort(s.findings.begin(), s.findings.end(),
                       [](const auto& a, const auto& b) { return std::tie(a.parameter, a.estimator) < std::tie(b.parameter, b.estimator); });
     }
-    {
+    if (parts.artifacts) {
         Statement st(db, "SELECT a.session_id, a.role, a.name, a.sha256 FROM test_sessions s JOIN session_artifacts a ON a.session_id = "
                          "s.session_id WHERE " + where + " ORDER BY a.session_id, a.role, a.name");
         st.bind(1, value);
         while (st.step()) out[index.at(st.column_int(0))].artifacts.push_back({st.column_text(1), st.column_text(2), st.column_text(3)});
     }
+    if (!parts.runs) return out;
     for (auto& r : detail::runs_where(db, where, value)) {
         const auto it = index.find(r.session_id.value_or(-1));
         if (it != index.end()) out[it->second].runs.push_back(std::move(r));
@@ -265,8 +268,15 @@ class Canon {
 public:
     explicit Canon(Sha256& h) : h_(h) {}
     void text(std::string_view name, std::string_view v) {
-        const std::string head = std::string(name) + ":" + std::to_string(v.size()) + ":";
-        h_.update(head).update(v).update("\n");
+        // "name:length:" built on the stack (this runs some 60 times per stored session).
+        char head[96];
+        std::size_t n = std::min(name.size(), sizeof head - 24);
+        std::copy_n(name.data(), n, head);
+        head[n++] = ':';
+        const auto r = std::to_chars(head + n, head + sizeof head - 1, v.size());
+        n = static_cast<std::size_t>(r.ptr - head);
+        head[n++] = ':';
+        h_.update(std::string_view(head, n)).update(v).update("\n");
     }
     void number(std::string_view name, double v) {
         if (v == 0) v = 0.0;  // SQLite stores -0.0 as the integer 0: hash both as "0"
@@ -275,7 +285,7 @@ public:
         text(name, std::string_view(buf, static_cast<std::size_t>(r.ptr - buf)));
     }
     void integer(std::string_view name, std::int64_t v) { text(name, std::to_string(v)); }
-    void none(std::string_view name) { h_.update(std::string(name) + ":-\n"); }
+    void none(std::string_view name) { h_.update(name).update(":-\n"); }
     void opt(std::string_view name, const std::optional<double>& v) { v ? number(name, *v) : none(name); }
     void opt(std::string_view name, const std::optional<std::int64_t>& v) { v ? integer(name, *v) : none(name); }
     void opt(std::string_view name, const std::optional<std::string>& v) { v ? text(name, *v) : none(name); }
@@ -303,97 +313,204 @@ double utc_days(const std::string& iso) {
            (n(11, 2) * 3600.0 + n(14, 2) * 60.0 + n(17, 2)) / 86400.0;
 }
 
+/// What one transaction of stores (one session, or a batch) has read and changed of the small
+/// per-tail tables, kept in memory and written once before COMMIT (flush): the summary rows
+/// (series_stats, position_status), the chain heads, the tails and positions known to exist. Each
+/// row is read from the database the first time the transaction touches it and then updated here
+/// by the same rules, in the same order, as one statement per session would: the result is the same
+/// as storing the sessions one by one. Dropped unflushed when the transaction rolls back.
+struct Batch {
+    struct Head {
+        std::int64_t session_id = 0, added = 0;
+        std::string sha;
+    };
+    std::map<std::tuple<std::string, std::string, std::string, std::string>, std::optional<SeriesStats>> series;
+    std::map<std::pair<std::string, std::string>, std::optional<PositionStatus>> positions;
+    std::unordered_map<std::string, Head> heads;
+    std::unordered_map<std::string, std::string> head_before;  ///< tail -> its stored head ("" none)
+    std::unordered_map<std::string, bool> tails_known;
+    std::unordered_map<std::string, std::string> position_ata;  ///< position -> its ATA reference, checked or registered
+};
+
+std::optional<SeriesStats>& series_row(Database& db, Batch& b, const std::string& tail, const std::string& position,
+                                       const std::string& serial, const std::string& parameter) {
+    auto [it, fresh] = b.series.try_emplace({tail, position, serial, parameter});
+    if (fresh) {
+        it->second = detail::find_series_stats(db, tail, position, serial, parameter);
+    }
+    return it->second;
+}
+
+std::optional<PositionStatus>& position_row(Database& db, Batch& b, const std::string& tail, const std::string& position) {
+    auto [it, fresh] = b.positions.try_emplace({tail, position});
+    if (fresh) it->second = detail::find_position_status(db, tail, position);
+    return it->second;
+}
+
 /// Adds (sign +1) or removes (sign -1, for a session a correction amends) a session's measurements
-/// in series_stats, and its place in position_status.
-void add_to_summaries(Database& db, const StoredTestSession& s, std::int64_t session_id, int sign) {
+/// in series_stats, and its place in position_status (docs/record-format.md, "Summary tables").
+void add_to_summaries(Database& db, Batch& b, const StoredTestSession& s, std::int64_t session_id, int sign) {
     const double days = utc_days(s.started_utc);
     const std::string position = s.position.value_or("");
-    Statement& up = db.cached(
-        "INSERT INTO series_stats(tail_number, position, actuator_serial, parameter, n, first_days, last_days, s_w, s_wt, s_wtt, s_wy, "
-        "s_wty, s_wyy, n_cycles, first_cycles, last_cycles, c_w, c_wt, c_wtt, c_wy, c_wty, c_wyy, last_session_id, last_value, "
-        "last_std_error, limit_kind, limit_value) VALUES (?1,?2,?3,?4,?5,?6,?6,?7,0,0,?8,0,?9,?10,?11,?11,?12,0,0,?13,0,?14,?15,?16,?17,?18,?19) "
-        "ON CONFLICT DO UPDATE SET n = n + excluded.n, "
-        "s_w = s_w + excluded.s_w, s_wt = s_wt + excluded.s_w * (excluded.first_days - first_days), "
-        "s_wtt = s_wtt + excluded.s_w * (excluded.first_days - first_days) * (excluded.first_days - first_days), "
-        "s_wy = s_wy + excluded.s_wy, s_wty = s_wty + excluded.s_wy * (excluded.first_days - first_days), s_wyy = s_wyy + excluded.s_wyy, "
-        "n_cycles = n_cycles + excluded.n_cycles, "
-        "c_w = c_w + excluded.c_w, "
-        "c_wt = c_wt + coalesce(excluded.c_w * (excluded.first_cycles - coalesce(first_cycles, excluded.first_cycles)), 0), "
-        "c_wtt = c_wtt + coalesce(excluded.c_w * (excluded.first_cycles - coalesce(first_cycles, excluded.first_cycles)) * "
-        "(excluded.first_cycles - coalesce(first_cycles, excluded.first_cycles)), 0), "
-        "c_wy = c_wy + excluded.c_wy, "
-        "c_wty = c_wty + coalesce(excluded.c_wy * (excluded.first_cycles - coalesce(first_cycles, excluded.first_cycles)), 0), "
-        "c_wyy = c_wyy + excluded.c_wyy, "
-        "first_cycles = coalesce(first_cycles, excluded.first_cycles), "
-        "last_cycles = CASE WHEN excluded.n > 0 AND excluded.last_days >= last_days THEN coalesce(excluded.last_cycles, last_cycles) "
-        "ELSE last_cycles END, "
-        "last_session_id = CASE WHEN excluded.n > 0 AND excluded.last_days >= last_days THEN excluded.last_session_id ELSE last_session_id END, "
-        "last_value = CASE WHEN excluded.n > 0 AND excluded.last_days >= last_days THEN excluded.last_value ELSE last_value END, "
-        "last_std_error = CASE WHEN excluded.n > 0 AND excluded.last_days >= last_days THEN excluded.last_std_error ELSE last_std_error END, "
-        "limit_kind = CASE WHEN excluded.n > 0 AND excluded.last_days >= last_days THEN excluded.limit_kind ELSE limit_kind END, "
-        "limit_value = CASE WHEN excluded.n > 0 AND excluded.last_days >= last_days THEN excluded.limit_value ELSE limit_value END, "
-        "last_days = CASE WHEN excluded.n > 0 THEN max(last_days, excluded.last_days) ELSE last_days END");
     for (const auto& m : session_measurements(s.findings)) {
         const double w = sign / (m.std_error * m.std_error);
-        up.reset();
-        up.bind(1, s.tail_number).bind(2, position).bind(3, s.actuator_serial).bind(4, m.parameter);
-        up.bind(5, static_cast<std::int64_t>(sign)).bind(6, days).bind(7, w).bind(8, w * m.value).bind(9, w * m.value * m.value);
-        if (s.cycles) {
-            up.bind(10, static_cast<std::int64_t>(sign)).bind(11, static_cast<double>(*s.cycles)).bind(12, w).bind(13, w * m.value);
-            up.bind(14, w * m.value * m.value);
-        } else {
-            up.bind(10, std::int64_t{0}).bind_null(11).bind(12, 0.0).bind(13, 0.0).bind(14, 0.0);
+        // The session's own sums, t = 0 at its own time (days and cycles).
+        const bool has_cycles = s.cycles.has_value();
+        const double e_cycles = has_cycles ? static_cast<double>(*s.cycles) : 0.0;
+        const double e_cw = has_cycles ? w : 0.0, e_cwy = has_cycles ? w * m.value : 0.0, e_cwyy = has_cycles ? w * m.value * m.value : 0.0;
+        std::optional<SeriesStats>& row = series_row(db, b, s.tail_number, position, s.actuator_serial, m.parameter);
+        if (!row) {
+            SeriesStats r;
+            r.tail_number = s.tail_number;
+            r.position = position;
+            r.actuator_serial = s.actuator_serial;
+            r.parameter = m.parameter;
+            r.n = sign;
+            r.first_days = r.last_days = days;
+            r.s_w = w;
+            r.s_wy = w * m.value;
+            r.s_wyy = w * m.value * m.value;
+            r.n_cycles = has_cycles ? sign : 0;
+            if (has_cycles) r.first_cycles = r.last_cycles = e_cycles;
+            r.c_w = e_cw;
+            r.c_wy = e_cwy;
+            r.c_wyy = e_cwyy;
+            r.last_session_id = session_id;
+            r.last_value = m.value;
+            r.last_std_error = m.std_error;
+            r.limit_kind = m.limit_kind;
+            r.limit_value = m.limit_value;
+            row = std::move(r);
+            continue;
         }
-        up.bind(15, session_id).bind(16, m.value).bind(17, m.std_error).bind(18, m.limit_kind);
-        bind_optional(up, 19, m.limit_value);
-        up.run();
+        SeriesStats& r = *row;
+        r.n += sign;
+        const double d = days - r.first_days;
+        r.s_w += w;
+        r.s_wt += w * d;
+        r.s_wtt += w * d * d;
+        r.s_wy += w * m.value;
+        r.s_wty += w * m.value * d;
+        r.s_wyy += w * m.value * m.value;
+        if (has_cycles) {
+            r.n_cycles += sign;
+            const double dc = e_cycles - r.first_cycles.value_or(e_cycles);
+            r.c_w += e_cw;
+            r.c_wt += e_cw * dc;
+            r.c_wtt += e_cw * dc * dc;
+            r.c_wy += e_cwy;
+            r.c_wty += e_cwy * dc;
+            r.c_wyy += e_cwyy;
+            if (!r.first_cycles) r.first_cycles = e_cycles;
+        }
+        if (sign > 0 && days >= r.last_days) {
+            if (has_cycles) r.last_cycles = e_cycles;
+            r.last_session_id = session_id;
+            r.last_value = m.value;
+            r.last_std_error = m.std_error;
+            r.limit_kind = m.limit_kind;
+            r.limit_value = m.limit_value;
+            r.last_days = days;
+        }
     }
     if (sign < 0) return;
-    Statement& ps = db.cached(
-        "INSERT INTO position_status(tail_number, position, actuator_serial, sessions, last_session_id, last_utc, last_verdict, last_cycles) "
-        "VALUES (?,?,?,1,?,?,?,?) ON CONFLICT DO UPDATE SET sessions = sessions + 1, "
-        "actuator_serial = CASE WHEN excluded.last_utc >= last_utc THEN excluded.actuator_serial ELSE actuator_serial END, "
-        "last_session_id = CASE WHEN excluded.last_utc >= last_utc THEN excluded.last_session_id ELSE last_session_id END, "
-        "last_verdict = CASE WHEN excluded.last_utc >= last_utc THEN excluded.last_verdict ELSE last_verdict END, "
-        "last_cycles = CASE WHEN excluded.last_utc >= last_utc THEN coalesce(excluded.last_cycles, last_cycles) ELSE last_cycles END, "
-        "last_utc = max(last_utc, excluded.last_utc)");
-    ps.bind(1, s.tail_number).bind(2, position).bind(3, s.actuator_serial).bind(4, session_id).bind(5, s.started_utc).bind(6, s.verdict);
-    bind_optional(ps, 7, s.cycles);
-    ps.run();
+    std::optional<PositionStatus>& ps = position_row(db, b, s.tail_number, position);
+    if (!ps) {
+        ps = PositionStatus{s.tail_number, position, s.actuator_serial, 1, session_id, s.started_utc, s.verdict, s.cycles};
+        return;
+    }
+    ps->sessions += 1;
+    if (s.started_utc >= ps->last_utc) {
+        ps->actuator_serial = s.actuator_serial;
+        ps->last_session_id = session_id;
+        ps->last_verdict = s.verdict;
+        if (s.cycles) ps->last_cycles = s.cycles;
+        ps->last_utc = s.started_utc;
+    }
 }
 
-void set_chain_head(Database& db, const std::string& tail, std::int64_t session_id, const std::string& sha) {
-    Statement& st = db.cached(
-        "INSERT INTO chain_heads(tail_number, session_id, sessions, content_sha256) VALUES (?,?,1,?) "
-        "ON CONFLICT DO UPDATE SET session_id = excluded.session_id, sessions = sessions + 1, content_sha256 = excluded.content_sha256");
-    st.bind(1, tail).bind(2, session_id).bind(3, sha).run();
-}
-
-std::string chain_head(Database& db, const std::string& tail) {
+std::string chain_head(Database& db, Batch& b, const std::string& tail) {
+    if (const auto it = b.heads.find(tail); it != b.heads.end()) return it->second.sha;
+    if (const auto it = b.head_before.find(tail); it != b.head_before.end()) return it->second;
     Statement& st = db.cached("SELECT content_sha256 FROM chain_heads WHERE tail_number = ?");
     st.bind(1, tail);
     std::string head = st.step() ? st.column_text(0) : "";
     st.reset();
+    b.head_before[tail] = head;
     return head;
 }
 
-void register_position(Database& db, const StoredTestSession& s) {
-    Statement& st = db.cached("SELECT ata_reference FROM positions WHERE position = ?");
-    st.bind(1, *s.position);
-    if (st.step()) {
-        const std::string ata = st.column_text(0);
-        st.reset();
-        if (ata != s.position_ata)
-            invalid("position " + *s.position + " is recorded in " + db.path() + " with ATA reference " + ata + ", not " + s.position_ata +
-                    ": a position keeps its ATA reference");
-        return;
+void set_chain_head(Batch& b, const std::string& tail, std::int64_t session_id, const std::string& sha) {
+    Batch::Head& h = b.heads[tail];
+    h.session_id = session_id;
+    h.sha = sha;
+    ++h.added;
+}
+
+/// Writes what the batch changed, inside its transaction.
+void flush(Database& db, Batch& b) {
+    Statement& up = db.cached(std::string("INSERT OR REPLACE INTO series_stats(") + detail::kSeriesStatsColumns +
+                              ") VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
+    for (const auto& [key, row] : b.series) {
+        if (!row) continue;
+        const SeriesStats& r = *row;
+        up.reset();
+        up.bind(1, r.tail_number).bind(2, r.position).bind(3, r.actuator_serial).bind(4, r.parameter).bind(5, r.n);
+        up.bind(6, r.first_days).bind(7, r.last_days);
+        int c = 8;
+        for (double v : {r.s_w, r.s_wt, r.s_wtt, r.s_wy, r.s_wty, r.s_wyy}) up.bind(c++, v);
+        up.bind(14, r.n_cycles);
+        bind_optional(up, 15, r.first_cycles);
+        bind_optional(up, 16, r.last_cycles);
+        c = 17;
+        for (double v : {r.c_w, r.c_wt, r.c_wtt, r.c_wy, r.c_wty, r.c_wyy}) up.bind(c++, v);
+        up.bind(23, r.last_session_id).bind(24, r.last_value).bind(25, r.last_std_error).bind(26, r.limit_kind);
+        bind_optional(up, 27, r.limit_value);
+        up.run();
     }
-    st.reset();
-    db.cached("INSERT INTO positions(position, ata_reference, description) VALUES (?,?,?)")
-        .bind(1, *s.position)
-        .bind(2, s.position_ata)
-        .bind(3, s.position_description)
-        .run();
+    Statement& ps = db.cached(
+        "INSERT OR REPLACE INTO position_status(tail_number, position, actuator_serial, sessions, last_session_id, last_utc, last_verdict, "
+        "last_cycles) VALUES (?,?,?,?,?,?,?,?)");
+    for (const auto& [key, row] : b.positions) {
+        if (!row) continue;
+        ps.reset();
+        ps.bind(1, row->tail_number).bind(2, row->position).bind(3, row->actuator_serial).bind(4, row->sessions);
+        ps.bind(5, row->last_session_id).bind(6, row->last_utc).bind(7, row->last_verdict);
+        bind_optional(ps, 8, row->last_cycles);
+        ps.run();
+    }
+    Statement& head = db.cached(
+        "INSERT INTO chain_heads(tail_number, session_id, sessions, content_sha256) VALUES (?,?,?,?) "
+        "ON CONFLICT DO UPDATE SET session_id = excluded.session_id, sessions = sessions + excluded.sessions, "
+        "content_sha256 = excluded.content_sha256");
+    for (const auto& [tail, h] : b.heads) {
+        head.reset();
+        head.bind(1, tail).bind(2, h.session_id).bind(3, h.added).bind(4, h.sha).run();
+    }
+    b = Batch{};
+}
+
+void register_position(Database& db, Batch& b, const StoredTestSession& s) {
+    std::string ata;
+    if (const auto it = b.position_ata.find(*s.position); it != b.position_ata.end()) {
+        ata = it->second;
+    } else {
+        Statement& st = db.cached("SELECT ata_reference FROM positions WHERE position = ?");
+        st.bind(1, *s.position);
+        const bool known = st.step();
+        ata = known ? st.column_text(0) : s.position_ata;
+        st.reset();
+        if (!known)
+            db.cached("INSERT INTO positions(position, ata_reference, description) VALUES (?,?,?)")
+                .bind(1, *s.position)
+                .bind(2, s.position_ata)
+                .bind(3, s.position_description)
+                .run();
+        b.position_ata[*s.position] = ata;
+    }
+    if (ata != s.position_ata)
+        invalid("position " + *s.position + " is recorded in " + db.path() + " with ATA reference " + ata + ", not " + s.position_ata +
+                ": a position keeps its ATA reference");
 }
 
 }  // namespace
@@ -440,7 +557,9 @@ std::vector<SessionMeasurement> session_measurements(const std::vector<StoredFin
     return out;
 }
 
-std::string session_content_sha256(const StoredTestSession& s, const std::string& prev_sha256) {
+namespace {
+/// The content hash of `s` with its limits hash given (the store computes it without copying `s`).
+std::string content_sha256(const StoredTestSession& s, const std::string& limits_sha256, const std::string& prev_sha256) {
     Sha256 h;
     h.update(kSessionHashTag).update("\n");
     Canon c(h);
@@ -461,13 +580,15 @@ std::string session_content_sha256(const StoredTestSession& s, const std::string
     c.text("verdict", s.verdict);
     c.text("verdict_note", s.verdict_note);
     c.text("limits_json", s.limits_json);
-    c.text("limits_sha256", s.limits_sha256);
+    c.text("limits_sha256", limits_sha256);
     c.opt("amends_session_id", s.amends_session_id);
     c.text("correction_reason", s.correction_reason);
-    auto artifacts = s.artifacts;
-    std::sort(artifacts.begin(), artifacts.end(), [](const auto& a, const auto& b) { return std::tie(a.role, a.name) < std::tie(b.role, b.name); });
+    std::vector<const StoredArtifact*> artifacts;
+    for (const auto& a : s.artifacts) artifacts.push_back(&a);
+    std::sort(artifacts.begin(), artifacts.end(), [](const auto* a, const auto* b) { return std::tie(a->role, a->name) < std::tie(b->role, b->name); });
     c.integer("artifacts", static_cast<std::int64_t>(artifacts.size()));
-    for (const auto& a : artifacts) {
+    for (const auto* ap : artifacts) {
+        const StoredArtifact& a = *ap;
         c.text("role", a.role);
         c.text("name", a.name);
         c.text("sha256", a.sha256);
@@ -505,10 +626,13 @@ std::string session_content_sha256(const StoredTestSession& s, const std::string
             c.text("note", e.note);
         }
     }
-    auto findings = s.findings;
-    std::sort(findings.begin(), findings.end(), [](const auto& a, const auto& b) { return std::tie(a.parameter, a.estimator) < std::tie(b.parameter, b.estimator); });
+    std::vector<const StoredFinding*> findings;
+    for (const auto& f : s.findings) findings.push_back(&f);
+    std::sort(findings.begin(), findings.end(),
+              [](const auto* a, const auto* b) { return std::tie(a->parameter, a->estimator) < std::tie(b->parameter, b->estimator); });
     c.integer("findings", static_cast<std::int64_t>(findings.size()));
-    for (const auto& f : findings) {
+    for (const auto* fp : findings) {
+        const StoredFinding& f = *fp;
         c.text("parameter", f.parameter);
         c.text("estimator", f.estimator);
         c.opt("value", f.value);
@@ -520,14 +644,21 @@ std::string session_content_sha256(const StoredTestSession& s, const std::string
     }
     return h.hex();
 }
+}  // namespace
+
+std::string session_content_sha256(const StoredTestSession& s, const std::string& prev_sha256) {
+    return content_sha256(s, s.limits_sha256, prev_sha256);
+}
 
 namespace {
 /// Writes one checked session inside the caller's open transaction.
-SessionReceipt insert_session(Database& db, const StoredTestSession& session) {
-    StoredTestSession s = session;
-    s.limits_sha256 = sha256_hex(s.limits_json);
-    db.cached("INSERT OR IGNORE INTO aircraft(tail_number) VALUES (?)").bind(1, s.tail_number).run();
-    if (s.position) register_position(db, s);
+SessionReceipt insert_session(Database& db, Batch& b, const StoredTestSession& session) {
+    // The session as given, with its three hashes beside it (no copy of the session).
+    const StoredTestSession& s = session;
+    const std::string limits_sha256 = sha256_hex(s.limits_json);
+    if (b.tails_known.emplace(s.tail_number, true).second)
+        db.cached("INSERT OR IGNORE INTO aircraft(tail_number) VALUES (?)").bind(1, s.tail_number).run();
+    if (s.position) register_position(db, b, s);
     std::optional<StoredTestSession> amended;
     if (s.amends_session_id) {
         Statement st(db, std::string("SELECT ") + kSessionColumns + " WHERE s.session_id = ?");
@@ -544,8 +675,8 @@ SessionReceipt insert_session(Database& db, const StoredTestSession& session) {
                     std::to_string(again.column_int(0)) + "; amend that one instead");
         amended->findings = load_findings(db, amended->session_id);
     }
-    s.prev_sha256 = chain_head(db, s.tail_number);
-    s.content_sha256 = session_content_sha256(s, s.prev_sha256);
+    const std::string prev_sha256 = chain_head(db, b, s.tail_number);
+    const std::string content = content_sha256(s, limits_sha256, prev_sha256);
 
     Statement& ins = db.cached(
         "INSERT INTO test_sessions(tail_number, actuator_serial, phase, started_utc, tool_version, verdict, verdict_note, limits_json, "
@@ -557,13 +688,13 @@ SessionReceipt insert_session(Database& db, const StoredTestSession& session) {
     bind_optional(ins, 10, s.cycles);
     bind_optional(ins, 11, s.hours_h);
     ins.bind(12, s.operator_id).bind(13, s.technician_name).bind(14, s.technician_certificate).bind(15, s.work_performed);
-    ins.bind(16, s.source).bind(17, s.limits_sha256);
+    ins.bind(16, s.source).bind(17, limits_sha256);
     bind_optional(ins, 18, s.amends_session_id);
-    ins.bind(19, s.correction_reason).bind(20, s.prev_sha256).bind(21, s.content_sha256);
+    ins.bind(19, s.correction_reason).bind(20, prev_sha256).bind(21, content);
     ins.run();
     SessionReceipt receipt;
     receipt.session_id = db.last_insert_id();
-    receipt.content_sha256 = s.content_sha256;
+    receipt.content_sha256 = content;
 
     for (const auto& run : s.runs) (void)detail::insert_run(db, run, receipt.session_id);
     Statement& fnd = db.cached(
@@ -584,10 +715,8 @@ SessionReceipt insert_session(Database& db, const StoredTestSession& session) {
     }
     // An installation change: the position shows a serial other than the one installed there so far.
     if (s.position && !s.actuator_serial.empty()) {
-        Statement& cur = db.cached("SELECT actuator_serial FROM position_status WHERE tail_number = ? AND position = ?");
-        cur.bind(1, s.tail_number).bind(2, *s.position);
-        const std::optional<std::string> installed = cur.step() ? std::optional<std::string>(cur.column_text(0)) : std::nullopt;
-        cur.reset();
+        const std::optional<PositionStatus>& now = position_row(db, b, s.tail_number, *s.position);
+        const std::optional<std::string> installed = now ? std::optional<std::string>(now->actuator_serial) : std::nullopt;
         if (!installed || *installed != s.actuator_serial) {
             StoredInstallation inst;
             inst.tail_number = s.tail_number;
@@ -609,9 +738,9 @@ SessionReceipt insert_session(Database& db, const StoredTestSession& session) {
             receipt.installation = inst;
         }
     }
-    set_chain_head(db, s.tail_number, receipt.session_id, s.content_sha256);
-    if (amended) add_to_summaries(db, *amended, amended->session_id, -1);
-    add_to_summaries(db, s, receipt.session_id, +1);
+    set_chain_head(b, s.tail_number, receipt.session_id, content);
+    if (amended) add_to_summaries(db, b, *amended, amended->session_id, -1);
+    add_to_summaries(db, b, s, receipt.session_id, +1);
     return receipt;
 }
 }  // namespace
@@ -619,7 +748,9 @@ SessionReceipt insert_session(Database& db, const StoredTestSession& session) {
 SessionReceipt store_session(Database& db, const StoredTestSession& session) {
     check_session(session);
     Transaction tx(db);
-    SessionReceipt receipt = insert_session(db, session);
+    Batch b;
+    SessionReceipt receipt = insert_session(db, b, session);
+    flush(db, b);
     tx.commit();
     return receipt;
 }
@@ -636,7 +767,9 @@ std::vector<SessionReceipt> store_sessions(Database& db, const std::vector<Store
     std::vector<SessionReceipt> out;
     out.reserve(sessions.size());
     Transaction tx(db);
-    for (const auto& s : sessions) out.push_back(insert_session(db, s));
+    Batch b;
+    for (const auto& s : sessions) out.push_back(insert_session(db, b, s));
+    flush(db, b);
     tx.commit();
     return out;
 }
@@ -660,8 +793,17 @@ std::vector<StoredTestSession> list_test_sessions(Database& db, const std::strin
 }
 
 std::vector<StoredTestSession> list_sessions_of_serial(Database& db, const std::string& actuator_serial) {
+    return list_sessions_of_serial(db, actuator_serial, SessionListParts{});
+}
+
+std::vector<StoredTestSession> list_test_sessions(Database& db, const std::string& tail_number, const SessionListParts& parts) {
+    check_tail_number(tail_number);
+    return list_where(db, "s.tail_number = ?", tail_number, parts);
+}
+
+std::vector<StoredTestSession> list_sessions_of_serial(Database& db, const std::string& actuator_serial, const SessionListParts& parts) {
     if (actuator_serial.empty()) invalid("an empty actuator serial names no actuator");
-    return list_where(db, "s.actuator_serial = ?", actuator_serial);
+    return list_where(db, "s.actuator_serial = ?", actuator_serial, parts);
 }
 
 void detail::seal_sessions_before_v3(Database& db) {
@@ -670,16 +812,18 @@ void detail::seal_sessions_before_v3(Database& db) {
         Statement st(db, "SELECT session_id FROM test_sessions ORDER BY session_id");
         while (st.step()) ids.push_back(st.column_int(0));
     }
+    Batch b;
     for (const auto id : ids) {
         StoredTestSession s = load_test_session(db, id);
         s.limits_sha256 = sha256_hex(s.limits_json);
-        s.prev_sha256 = chain_head(db, s.tail_number);
+        s.prev_sha256 = chain_head(db, b, s.tail_number);
         s.content_sha256 = session_content_sha256(s, s.prev_sha256);
         Statement up(db, "UPDATE test_sessions SET limits_sha256 = ?, prev_sha256 = ?, content_sha256 = ? WHERE session_id = ?");
         up.bind(1, s.limits_sha256).bind(2, s.prev_sha256).bind(3, s.content_sha256).bind(4, id).run();
-        set_chain_head(db, s.tail_number, id, s.content_sha256);
-        add_to_summaries(db, s, id, +1);
+        set_chain_head(b, s.tail_number, id, s.content_sha256);
+        add_to_summaries(db, b, s, id, +1);
     }
+    flush(db, b);
 }
 
 }  // namespace emadiag::db

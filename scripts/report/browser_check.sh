@@ -1,16 +1,19 @@
 #!/usr/bin/env bash
 # The HTML maintenance report in a real browser (docs/report-html.md, issue 11 part 4):
-#   1. a simulated maintenance history (emadiag history-sim) into a fresh database, then
-#      emadiag trend --format html --out report.html;
-#   2. the file itself: well-formed, no script, no URL, the CSP, 4 inline SVG plots (report_checks.py html);
+#   1. simulated maintenance histories (emadiag history-sim) into fresh databases, then two reports:
+#      trend.html (emadiag trend --format html: one tail, 4 plots) and report.html (emadiag report
+#      --format html: two positions with flight cycles, a serial swapped at one of them (3 serials), the
+#      technician's name holding markup that must come out escaped: 5 sections of 4 plots);
+#   2. each file itself: well-formed, no script, no URL, the CSP, its inline SVG plots (report_checks.py html);
 #   3. headless Chromium loads it from a file:// URL: its console shows nothing (no error, no CSP
 #      violation, no failed load: the report runs no script, so any console message is a fault), the
-#      DOM it built holds the 4 plots, and its screenshot shows them (report_checks.py png);
-#   4. controls, so the checks are known to bite in this browser: the same report with a script and
+#      DOM it built holds the plots, and its screenshot shows them (report_checks.py png);
+#   4. controls, so the checks are known to bite in this browser: report.html with a script and
 #      an external image added must fail the console check, and with its plots removed the screenshot
 #      check.
 # Usage: browser_check.sh [EMADIAG_BINARY [OUT_DIR]]   (defaults build/src/emadiag, a temp directory)
-# Leaves report.html, screenshot.png and the browser logs in OUT_DIR; exits non-zero on any failure.
+# Leaves trend.html, report.html, their screenshots (.png) and the browser logs in OUT_DIR; exits
+# non-zero on any failure.
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -60,34 +63,63 @@ browser() {
 console_lines() { grep -E 'CONSOLE|Uncaught' "$out/$1.log" || true; }
 
 echo "== browser_check: output in $out"
-db="$out/maintenance.db"
+echo "== Chromium: $("$chromium_bin" --version 2>/dev/null | tail -1)"
+
+# check_report NAME PLOTS: the static checks, the screenshot with its console and the DOM of NAME.html.
+check_report() {
+  local name="$1" plots="$2"
+  echo "== $name.html: $(wc -c <"$out/$name.html") bytes"
+  python3 "$checks" html "$out/$name.html" --plots "$plots" || fail "$name.html static checks"
+  browser "$out/$name.html" "$name" screenshot || fail "chromium exited with $? on the screenshot of $name.html"
+  [ -s "$out/$name.png" ] || fail "no screenshot of $name.html written"
+  local msgs
+  msgs="$(console_lines "$name")"
+  if [ -n "$msgs" ]; then
+    fail "the console shows messages for $name.html:"
+    echo "$msgs"
+  else
+    echo "console: no messages"
+  fi
+  [ -s "$out/$name.png" ] && { python3 "$checks" png "$out/$name.png" || fail "the screenshot of $name.html does not show the plots"; }
+  browser "$out/$name.html" "$name" dom || fail "chromium exited with $? on --dump-dom of $name.html"
+  local svgs circles
+  svgs=$(grep -o '<svg' "$out/$name.dom.html" | wc -l)
+  circles=$(grep -o '<circle' "$out/$name.dom.html" | wc -l)
+  echo "dom: $svgs svg elements, $circles circles"
+  [ "$svgs" -eq "$plots" ] || fail "the DOM of $name.html holds $svgs svg elements, expected $plots"
+  [ "$(console_lines "$name")" = "" ] || fail "the console shows messages on --dump-dom of $name.html"
+}
+
+# 1. trend: one tail, no positions.
+db="$out/trend.db"
 rm -f "$db"
 "$emadiag" history-sim --db "$db" --tail N123EM --sessions 8 --days-between 30 \
-  --fdj-start 0.08 --fdj-rate-per-100d 0.004 --seed 1 >"$out/history-sim.txt"
-"$emadiag" trend --db "$db" --tail N123EM --format html --out "$out/report.html"
-echo "report: $(wc -c <"$out/report.html") bytes"
+  --fdj-start 0.08 --fdj-rate-per-100d 0.004 --seed 1 >"$out/history-sim-trend.txt"
+"$emadiag" trend --db "$db" --tail N123EM --format html --out "$out/trend.html"
+check_report trend 4
 
-echo "== the file"
-python3 "$checks" html "$out/report.html" --plots 4 || fail "report.html static checks"
-
-echo "== Chromium: $("$chromium_bin" --version 2>/dev/null | tail -1)"
-browser "$out/report.html" report screenshot || fail "chromium exited with $? on the screenshot"
-[ -s "$out/report.png" ] || fail "no screenshot written"
-msgs="$(console_lines report)"
-if [ -n "$msgs" ]; then
-  fail "the console shows messages:"
-  echo "$msgs"
+# 2. report: LH-ELEV wearing towards its limit with its serial swapped after 6 sessions, RH-ELEV
+# healthy; cycles on every session; a technician name with markup (stored as given, shown escaped).
+db="$out/report.db"
+rm -f "$db"
+evil='<b>Jo & "Mo"</b>'
+"$emadiag" history-sim --db "$db" --tail N123EM --position LH-ELEV --serial SN-LH-1 --sessions 6 --days-between 30 \
+  --cycles 1200 --cycles-per-day 5 --technician "$evil" --certificate B1-4711 \
+  --fdj-start 0.08 --fdj-rate-per-100d 0.006 --seed 1 >"$out/history-sim-report-1.txt"
+"$emadiag" history-sim --db "$db" --tail N123EM --position LH-ELEV --serial SN-LH-2 --sessions 6 --days-between 30 \
+  --start-utc 2026-07-01T08:00:00Z --cycles 2100 --cycles-per-day 5 --technician "$evil" --certificate B1-4711 \
+  --fdj-start 0.085 --fdj-rate-per-100d 0.005 --seed 2 >"$out/history-sim-report-2.txt"
+"$emadiag" history-sim --db "$db" --tail N123EM --position RH-ELEV --serial SN-RH-1 --sessions 8 --days-between 30 \
+  --cycles 1200 --cycles-per-day 5 --fdj-start 0.08 --fdj-rate-per-100d 0.001 --seed 3 >"$out/history-sim-report-3.txt"
+"$emadiag" report --db "$db" --tail N123EM --format html --out "$out/report.html"
+check_report report 20
+if grep -qF '<b>Jo' "$out/report.html"; then
+  fail "report.html holds the stored technician name unescaped"
+elif grep -qF '&lt;b&gt;Jo &amp; &quot;Mo&quot;&lt;/b&gt;' "$out/report.html"; then
+  echo "stored markup: shown escaped"
 else
-  echo "console: no messages"
+  fail "report.html does not show the stored technician name"
 fi
-[ -s "$out/report.png" ] && { python3 "$checks" png "$out/report.png" || fail "screenshot does not show the plots"; }
-
-browser "$out/report.html" report dom || fail "chromium exited with $? on --dump-dom"
-svgs=$(grep -o '<svg' "$out/report.dom.html" | wc -l)
-circles=$(grep -o '<circle' "$out/report.dom.html" | wc -l)
-echo "dom: $svgs svg elements, $circles circles"
-[ "$svgs" -eq 4 ] || fail "the DOM holds $svgs svg elements, expected 4"
-[ "$(console_lines report)" = "" ] || fail "the console shows messages on --dump-dom"
 
 echo "== controls (each must be caught)"
 sed 's|</body>|<img src="https://example.invalid/x.png"/><script>console.error("control")</script></body>|' \
@@ -114,4 +146,4 @@ if [ "$failures" -ne 0 ]; then
   echo "browser_check: $failures failure(s); files in $out"
   exit 1
 fi
-echo "browser_check: OK (report $(wc -c <"$out/report.html") bytes, screenshot $out/report.png)"
+echo "browser_check: OK (trend.html $(wc -c <"$out/trend.html") bytes, report.html $(wc -c <"$out/report.html") bytes; screenshots $out/trend.png, $out/report.png)"

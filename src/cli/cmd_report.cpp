@@ -1,11 +1,11 @@
-// emadiag report --tail T [--db FILE] [--format text|json|csv] [--out FILE] [--phase all|pre-flight|...]
+// emadiag report --tail T [--db FILE] [--format text|json|csv|html] [--out FILE] [--phase all|pre-flight|...]
 //   [--horizon-days 3650] [--horizon-cycles 20000] [--draws 4000] [--seed 1]:
 // the maintenance record of one aircraft (prognostics/fleet_record.hpp, docs/fleet-record.md): per
 // position and per actuator serial the session history, each parameter's trend against flight
 // cycles and days with the fitted degradation, the limit crossing and the RUL with its 90 %
 // interval, the installations and the open discovery findings. (`trend` is the earlier one-tail
-// calendar report, kept as it was.) HTML is written by the rendering module (src/report): see
-// kHtmlHook below.
+// calendar report, kept as it was.) HTML is one self-contained file written by the rendering module
+// (report/record_adapter.hpp, report/html_report.hpp, docs/report-html.md).
 #include "cli/command.hpp"
 #include "cli/db_source.hpp"
 #include "cli/output_file.hpp"
@@ -14,6 +14,10 @@
 #include "estimation/health_estimate.hpp"
 #include "prognostics/fleet_record.hpp"
 #include "prognostics/utc_time.hpp"
+#include "report/html_report.hpp"
+#include "report/record_adapter.hpp"
+
+#include <iostream>
 
 #include <iomanip>
 #include <memory>
@@ -156,12 +160,6 @@ std::string csv_report(const pg::FleetRecord& r) {
     return os.str();
 }
 
-/// The HTML hook: the rendering module (src/report, branch i11r) supplies an HTML writer of this
-/// record; until it is merged, --format html says so instead of writing a lesser page.
-constexpr const char* kHtmlHook =
-    "--format html is written by the report rendering module (src/report: report::render_html of the record); this build has "
-    "text, json and csv";
-
 const bool registered = register_command(Command{
     "report", "Maintenance record of one aircraft: per position and per serial the history, trends in cycles and days, RUL, findings",
     [](CLI::App& sub) -> std::function<int()> {
@@ -170,7 +168,7 @@ const bool registered = register_command(Command{
             ->capture_default_str()
             ->check(sqlite_file_or_fleet_uri());
         sub.add_option("--tail", o->tail, "Aircraft tail number")->required();
-        sub.add_option("--format", o->format, "text, json or csv")->capture_default_str()->check(CLI::IsMember({"text", "json", "csv", "html"}));
+        sub.add_option("--format", o->format, "text, json, csv or html (one self-contained file with the plots, docs/report-html.md)")->capture_default_str()->check(CLI::IsMember({"text", "json", "csv", "html"}));
         sub.add_option("--out", o->out, "Write the report to this file (whole, or not at all) instead of stdout");
         sub.add_option("--phase", o->record.phase, "Sessions of this phase in the trends: all, pre-flight, post-flight, in-flight, load-rig")
             ->capture_default_str();
@@ -179,18 +177,21 @@ const bool registered = register_command(Command{
         sub.add_option("--draws", o->record.rul.draws, "Monte Carlo draws for the RUL intervals")->capture_default_str();
         sub.add_option("--seed", o->record.rul.seed, "Seed of the Monte Carlo draws (recorded in the report)")->capture_default_str();
         return [o] {
-            if (o->format == "html") throw EmadiagError(kHtmlHook);
             db::OpenedSource database = db::open_record_source(o->db);
             const pg::FleetRecord record = pg::build_fleet_record(*database.source, o->tail, o->record);
             std::string text;
             if (o->format == "json") {
                 text = pg::to_json(record).dump(2) + "\n";
+            } else if (o->format == "html") {
+                text = report::render_html(report::from_fleet_record(record, {pg::now_utc_time(), EMADIAG_VERSION, o->db}));
             } else if (o->format == "csv") {
                 text = csv_report(record);
             } else {
                 text = text_report(record);
             }
             write_output(o->out, text);
+            if (!o->out.empty())
+                std::cerr << "wrote the " << o->format << " report of " << o->tail << " to " << o->out << " (" << text.size() << " bytes)\n";
             return 0;
         };
     }});

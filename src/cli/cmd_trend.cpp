@@ -7,6 +7,7 @@
 // the plots (report/html_report.hpp, docs/report-html.md).
 #include "cli/command.hpp"
 #include "cli/db_source.hpp"
+#include "cli/output_file.hpp"
 
 #include "core/emadiag_error.hpp"
 #include "emadiag/db/database.hpp"
@@ -16,9 +17,6 @@
 #include "report/html_report.hpp"
 #include "report/trend_adapter.hpp"
 
-#include <chrono>
-#include <cstdio>
-#include <fstream>
 
 #include <cmath>
 #include <iomanip>
@@ -42,31 +40,6 @@ struct TrendCliOptions {
     std::string format = "text";
     std::string out;
 };
-
-/// Writes `text` to `path` through a temporary file renamed into place, so that a failed write
-/// never leaves a half-written report.
-void write_file(const std::string& path, const std::string& text) {
-    const std::string tmp = path + ".tmp";
-    {
-        std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-        if (!f) throw EmadiagError("cannot open " + tmp + " for writing");
-        f << text;
-        f.close();
-        if (!f) {
-            std::remove(tmp.c_str());
-            throw EmadiagError("cannot write " + tmp + " (disk full?)");
-        }
-    }
-    if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-        std::remove(tmp.c_str());
-        throw EmadiagError("cannot rename " + tmp + " to " + path);
-    }
-}
-
-std::string now_utc() {
-    const auto s = std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch()).count();
-    return pg::format_utc_time(static_cast<double>(s) / pg::kSecondsPerDay);
-}
 
 std::string num(double v, int digits = 4) {
     std::ostringstream os;
@@ -208,7 +181,7 @@ const bool registered = register_command(Command{
                 text << pg::to_json(report).dump(2) << '\n';
             } else if (format == "html") {
                 const report::ReportDocument doc = report::from_trend_report(
-                    report, database.source->sessions_of_tail(o->tail), {now_utc(), EMADIAG_VERSION, o->db});
+                    report, database.source->sessions_of_tail(o->tail), {pg::now_utc_time(), EMADIAG_VERSION, o->db});
                 text << report::render_html(doc);
             } else {
                 print_text(text, report);
@@ -216,7 +189,7 @@ const bool registered = register_command(Command{
             if (o->out.empty()) {
                 std::cout << text.str();
             } else {
-                write_file(o->out, text.str());
+                write_output(o->out, text.str());
                 std::cerr << "wrote the " << format << " report of " << o->tail << " to " << o->out << " (" << text.str().size() << " bytes)\n";
             }
             return 0;

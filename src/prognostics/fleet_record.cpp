@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <map>
 #include <set>
+#include <tuple>
 
 namespace emadiag::prognostics {
 namespace {
@@ -219,7 +220,9 @@ FleetRecord build_fleet_record(db::RecordSource& database, const std::string& ta
     r.database = database.name();
     r.options = options;
     db::check_tail_number(tail_number);
-    auto all = database.sessions_of_tail(tail_number);
+    // Rows and findings: the report shows neither artifacts nor runs.
+    const db::SessionListParts rows_and_findings{false, false};
+    auto all = database.sessions_of_tail(tail_number, rows_and_findings);
     r.sessions_total = static_cast<std::int64_t>(all.size());
     std::set<std::int64_t> amended;
     for (const auto& s : all)
@@ -241,9 +244,17 @@ FleetRecord build_fleet_record(db::RecordSource& database, const std::string& ta
     r.installations = database.installations_of_tail(tail_number);
     r.open_findings = database.discovery_findings(tail_number, true);
 
-    // Per position: the history across serials; the trends of the serial installed now.
+    std::set<std::string> serials;
+    for (const auto& s : current)
+        if (!s.actuator_serial.empty()) serials.insert(s.actuator_serial);
+    // Per position: the history across serials; the trends of the serial installed now. (Each
+    // session is moved to its position: the serial views below copy from the positions.)
     std::map<std::string, std::vector<db::StoredTestSession>> by_position;
-    for (const auto& s : current) by_position[s.position.value_or(kNoPosition)].push_back(s);
+    for (auto& s : current) {
+        const std::string position = s.position.value_or(kNoPosition);
+        by_position[position].push_back(std::move(s));
+    }
+    current.clear();
     for (auto& [position, sessions] : by_position) {
         HistoryView v;
         v.kind = "position";
@@ -266,9 +277,6 @@ FleetRecord build_fleet_record(db::RecordSource& database, const std::string& ta
         r.positions.push_back(std::move(v));
     }
     // Per serial seen on this tail: its whole history on every tail.
-    std::set<std::string> serials;
-    for (const auto& s : current)
-        if (!s.actuator_serial.empty()) serials.insert(s.actuator_serial);
     for (const auto& serial : serials) {
         HistoryView v;
         v.kind = "serial";
@@ -279,10 +287,14 @@ FleetRecord build_fleet_record(db::RecordSource& database, const std::string& ta
         const bool only_here = !database.serial_seen_elsewhere(serial, tail_number);
         std::vector<db::StoredTestSession> of_serial;
         if (only_here) {
-            for (const auto& s : current)
-                if (s.actuator_serial == serial) of_serial.push_back(s);
+            for (const auto& pv : r.positions)
+                for (const auto& s : pv.sessions)
+                    if (s.actuator_serial == serial) of_serial.push_back(s);
+            std::sort(of_serial.begin(), of_serial.end(), [](const auto& a, const auto& b) {
+                return std::tie(a.started_utc, a.session_id) < std::tie(b.started_utc, b.session_id);
+            });
         } else {
-            of_serial = database.sessions_of_serial(serial);
+            of_serial = database.sessions_of_serial(serial, rows_and_findings);
         }
         for (const auto& s : of_serial)
             if (s.amends_session_id) amended_here.insert(*s.amends_session_id);

@@ -43,18 +43,18 @@ void check(const TrendOptions& o) {
     check(o.rul);
 }
 
-ParameterTrend analyse_parameter(const ParameterSeries& series, const RulOptions& options) {
+ParameterTrend analyse_parameter(ParameterSeries series, const RulOptions& options) {
     ParameterTrend p;
-    p.series = series;
-    p.fits = fit_models(series.points);
+    p.series = std::move(series);
+    p.fits = fit_models(p.series.points);
     const DegradationFit& chosen = p.fits.chosen();
     p.has_fit = chosen.fitted;
     if (p.has_fit) {
-        const auto [slope, se] = chosen.slope_at(series.points.back().t_days);
+        const auto [slope, se] = chosen.slope_at(p.series.points.back().t_days);
         p.trend_per_period = slope * kTrendPeriodDays;
         p.trend_per_period_se = se * kTrendPeriodDays;
     }
-    p.rul = estimate_rul(series.points, chosen, series.limit, options);
+    p.rul = estimate_rul(p.series.points, chosen, p.series.limit, options);
     return p;
 }
 

@@ -57,7 +57,7 @@ struct TrendReport {
 };
 
 /// One parameter's trend from its series.
-[[nodiscard]] ParameterTrend analyse_parameter(const ParameterSeries& series, const RulOptions& options);
+[[nodiscard]] ParameterTrend analyse_parameter(ParameterSeries series, const RulOptions& options);
 
 /// The report of `sessions` (one tail, oldest first, as db::list_test_sessions gives them). t = 0 is
 /// the tail's first session in any phase; the phase filter then picks the sessions analysed.

@@ -2,6 +2,7 @@
 
 #include "core/emadiag_error.hpp"
 
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -134,6 +135,11 @@ std::string format_utc_time(double days_since_epoch) {
                   static_cast<int>(s / kSecondsPerHour), static_cast<int>(s % kSecondsPerHour / kSecondsPerMinute),
                   static_cast<int>(s % kSecondsPerMinute));
     return buf;
+}
+
+std::string now_utc_time() {
+    const auto s = std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+    return format_utc_time(static_cast<double>(s) / kSecondsPerDay);
 }
 
 }  // namespace emadiag::prognostics

@@ -23,4 +23,7 @@ inline constexpr double kSecondsPerDay = 86400.0;
 /// "YYYY-MM-DDThh:mm:ssZ" (to the second, rounded to the nearest).
 [[nodiscard]] std::string format_utc_time(double days_since_epoch);
 
+/// The system clock now, as format_utc_time (when a report was made).
+[[nodiscard]] std::string now_utc_time();
+
 }  // namespace emadiag::prognostics

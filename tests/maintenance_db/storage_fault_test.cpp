@@ -411,6 +411,85 @@ TEST_F(StorageFaults, CorruptPageIsRefusedAndNeverWritten) {
     EXPECT_EQ(file_bytes(path_), bytes);
 }
 
+// The bounded check at open (a file above Database::kFullCheckMaxBytes; called here directly on a
+// small file): it finds a truncated file and a corrupt page of a table updated in place; a corrupt
+// page of a large append-only table it does not read is found by the write that meets it (cell
+// size check on), which fails and leaves the file as it was; the full check finds both.
+std::int64_t root_page(const std::string& path, const std::string& table) {
+    RawDb raw(path);
+    return std::stoll(raw.text("SELECT rootpage FROM sqlite_schema WHERE name = '" + table + "'"));
+}
+
+void smash_page(const std::string& path, std::int64_t page) {
+    std::string bytes = file_bytes(path);
+    const std::size_t at = static_cast<std::size_t>(page - 1) * 4096;
+    ASSERT_LT(at + 64, bytes.size());
+    for (std::size_t k = 0; k < 64; ++k) bytes[at + k] = static_cast<char>(0xA5);
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out << bytes;
+}
+
+TEST_F(StorageFaults, BoundedOpenCheckFindsATruncatedFile) {
+    {
+        db::Database d(path_);
+        for (int i = 0; i < 3; ++i) (void)db::store_test_session(d, example_session(i));
+    }
+    fs::resize_file(path_, fs::file_size(path_) - 4096);
+    const std::string before = file_bytes(path_);
+    // Opened without the check at open, SQLite itself may already refuse the file (it compares the
+    // header's page count with the file); else the bounded check names the truncation.
+    std::vector<std::string> problems;
+    try {
+        db::Database d(path_, db::Database::kDefaultBusyTimeoutMs, false);
+        problems = d.integrity_problems(db::Database::IntegrityScope::Open);
+        ASSERT_FALSE(problems.empty());
+        EXPECT_THAT(problems.front(), HasSubstr("truncated"));
+    } catch (const db::DbError& e) {
+        EXPECT_EQ(e.kind(), db::DbErrorKind::Corrupt) << e.what();
+    }
+    // And the normal open refuses it.
+    EXPECT_THAT([&] { db::Database d(path_); }, ::testing::ThrowsMessage<db::DbError>(HasSubstr("corrupt or truncated")));
+    EXPECT_EQ(file_bytes(path_), before);
+}
+
+TEST_F(StorageFaults, BoundedOpenCheckFindsACorruptSummaryPage) {
+    {
+        db::Database d(path_);
+        for (int i = 0; i < 3; ++i) (void)db::store_test_session(d, example_session(i));
+        EXPECT_TRUE(d.integrity_problems(db::Database::IntegrityScope::Open).empty());
+    }
+    smash_page(path_, root_page(path_, "series_stats"));
+    db::Database d(path_, db::Database::kDefaultBusyTimeoutMs, false);
+    std::vector<std::string> problems;
+    try {
+        problems = d.integrity_problems(db::Database::IntegrityScope::Open);
+    } catch (const db::DbError& e) {
+        problems.push_back(e.what());  // SQLITE_CORRUPT on reading the page is a finding too
+    }
+    EXPECT_FALSE(problems.empty());
+}
+
+TEST_F(StorageFaults, ACorruptAppendOnlyPageFailsTheWriteThatMeetsItAndTheFullCheckFindsIt) {
+    {
+        db::Database d(path_);
+        for (int i = 0; i < 3; ++i) (void)db::store_test_session(d, example_session(i));
+    }
+    smash_page(path_, root_page(path_, "findings"));
+    const std::string before = file_bytes(path_);
+    db::Database d(path_, db::Database::kDefaultBusyTimeoutMs, false);
+    EXPECT_TRUE(d.integrity_problems(db::Database::IntegrityScope::Open).empty());  // not read at open
+    EXPECT_THAT([&] { (void)db::store_test_session(d, example_session(7)); },
+                ::testing::ThrowsMessage<db::DbError>(HasSubstr("corrupt")));
+    EXPECT_EQ(file_bytes(path_), before);
+    std::vector<std::string> full;
+    try {
+        full = d.integrity_problems(db::Database::IntegrityScope::Full);
+    } catch (const db::DbError& e) {
+        full.push_back(e.what());
+    }
+    EXPECT_FALSE(full.empty());
+}
+
 TEST_F(StorageFaults, ReadOnlyDatabaseIsAClearError) {
     {
         db::Database d(path_);

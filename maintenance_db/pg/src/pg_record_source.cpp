@@ -108,7 +108,7 @@ std::vector<std::string> PgRecordSource::tail_numbers() {
     return out;
 }
 
-std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string& where, const std::string& value) {
+std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string& where, const std::string& value, const SessionListParts& parts) {
     std::vector<StoredTestSession> out;
     std::unordered_map<std::int64_t, std::size_t> index;
     for (const auto& r : pg_.query(std::string("SELECT ") + kSessionColumns + " WHERE " + where + " ORDER BY s.started_utc, s.session_id",
@@ -139,10 +139,13 @@ std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string&
         f.note = text(r, 8);
         out[index.at(int_of(r, 0))].findings.push_back(std::move(f));
     }
-    for (const auto& r : pg_.query("SELECT a.session_id, a.role, a.name, a.sha256 FROM session_artifacts a WHERE a.session_id = ANY($1::bigint[]) "
-                                   "ORDER BY a.session_id, a.role, a.name",
-                                   {id_array}))
-        out[index.at(int_of(r, 0))].artifacts.push_back({text(r, 1), text(r, 2), text(r, 3)});
+    if (!parts.artifacts && !parts.runs) return out;
+    if (parts.artifacts)
+        for (const auto& r : pg_.query("SELECT a.session_id, a.role, a.name, a.sha256 FROM session_artifacts a WHERE a.session_id = ANY($1::bigint[]) "
+                                       "ORDER BY a.session_id, a.role, a.name",
+                                       {id_array}))
+            out[index.at(int_of(r, 0))].artifacts.push_back({text(r, 1), text(r, 2), text(r, 3)});
+    if (!parts.runs) return out;
     std::vector<StoredRun> runs;
     std::unordered_map<std::int64_t, std::size_t> run_index;
     for (const auto& r : pg_.query("SELECT r.run_id, r.tail_number, r.actuator_serial, r.started_utc, r.source, r.load_case, r.sequence, "
@@ -193,13 +196,13 @@ std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string&
     return out;
 }
 
-std::vector<StoredTestSession> PgRecordSource::sessions_of_tail(const std::string& tail_number) {
+std::vector<StoredTestSession> PgRecordSource::sessions_of_tail(const std::string& tail_number, const SessionListParts& parts) {
     check_tail_number(tail_number);
-    return sessions_where("s.tail_number = $1", tail_number);
+    return sessions_where("s.tail_number = $1", tail_number, parts);
 }
-std::vector<StoredTestSession> PgRecordSource::sessions_of_serial(const std::string& actuator_serial) {
+std::vector<StoredTestSession> PgRecordSource::sessions_of_serial(const std::string& actuator_serial, const SessionListParts& parts) {
     if (actuator_serial.empty()) throw DbError("an empty actuator serial names no actuator", DbErrorKind::Invalid);
-    return sessions_where("s.actuator_serial = $1", actuator_serial);
+    return sessions_where("s.actuator_serial = $1", actuator_serial, parts);
 }
 bool PgRecordSource::serial_seen_elsewhere(const std::string& serial, const std::string& tail) {
     return !pg_.query("SELECT 1 FROM test_sessions WHERE actuator_serial = $1 AND tail_number <> $2 LIMIT 1", {serial, tail}).empty();

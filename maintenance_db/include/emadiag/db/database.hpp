@@ -2,6 +2,7 @@
 // A thin RAII layer over the SQLite C API (after SQLiteCpp): Database, Statement, Transaction.
 #include <cstdint>
 #include <memory>
+#include <vector>
 #include <unordered_map>
 #include <optional>
 #include <string>
@@ -47,12 +48,27 @@ private:
 class Database {
 public:
     static constexpr int kDefaultBusyTimeoutMs = 5000;
+    /// Files up to this size get the full PRAGMA quick_check at open (it reads the whole file, about
+    /// 1 s per GB: at most a few tenths of a second here); larger ones the bounded check
+    /// (IntegrityScope::Open, docs/record-format.md "Corruption").
+    static constexpr std::uintmax_t kFullCheckMaxBytes = std::uintmax_t{256} << 20;
+    /// What integrity_problems checks.
+    enum class IntegrityScope {
+        /// The bounded check at open: the header's page count against the file size (a truncated
+        /// file), the schema, and PRAGMA quick_check of every table a store updates in place (the
+        /// summary tables, chain heads, positions, aircraft) with their indexes. The large append-only
+        /// tables are checked page by page as SQLite reads them (PRAGMA cell_size_check is on), so a
+        /// write that meets a corrupt page fails and rolls back; the full check is `emadiag verify`.
+        Open,
+        /// PRAGMA quick_check of the whole file.
+        Full,
+    };
     /// Opens (creating if needed) the database at `path` (":memory:" for tests) and brings its schema
     /// to the newest version. A busy database is retried for busy_timeout_ms before DbError (kind
     /// Busy). An existing file is checked before anything is written: its header must be SQLite's
-    /// and, with `quick_check`, PRAGMA quick_check must pass; otherwise DbError (kind Corrupt) and the
-    /// file is left untouched. quick_check reads the whole file (about 1 s per GB); skip it only for
-    /// a file this process has just checked or created.
+    /// and, with `quick_check`, the integrity check must pass (Full up to kFullCheckMaxBytes, else
+    /// Open); otherwise DbError (kind Corrupt) and the file is left untouched. Skip it only for a
+    /// file this process has just checked or created.
     explicit Database(const std::string& path, int busy_timeout_ms = kDefaultBusyTimeoutMs, bool quick_check = true);
     ~Database();
     Database(const Database&) = delete;
@@ -69,6 +85,9 @@ public:
     /// A statement prepared once per connection and kept (for the bulk paths); reset and unbound
     /// on every call. Valid while the Database lives.
     [[nodiscard]] Statement& cached(const std::string& sql);
+    /// The problems an integrity check finds (at most max_problems lines; empty: none). Throws
+    /// DbError when the file cannot be read at all.
+    [[nodiscard]] std::vector<std::string> integrity_problems(IntegrityScope scope, int max_problems = 20);
 
 private:
     /// Throws DbError, before anything is written, for a read-only file and for a corrupt or

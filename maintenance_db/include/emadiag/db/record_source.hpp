@@ -20,9 +20,14 @@ public:
     [[nodiscard]] virtual const std::string& name() const = 0;
     /// Every tail number, sorted (byte order).
     [[nodiscard]] virtual std::vector<std::string> tail_numbers() = 0;
-    /// As list_test_sessions / list_sessions_of_serial.
-    [[nodiscard]] virtual std::vector<StoredTestSession> sessions_of_tail(const std::string& tail_number) = 0;
-    [[nodiscard]] virtual std::vector<StoredTestSession> sessions_of_serial(const std::string& actuator_serial) = 0;
+    /// As list_test_sessions / list_sessions_of_serial, with the parts asked for (a report needs
+    /// neither the artifacts nor the runs: SessionListParts{false, false}).
+    [[nodiscard]] virtual std::vector<StoredTestSession> sessions_of_tail(const std::string& tail_number, const SessionListParts& parts) = 0;
+    [[nodiscard]] virtual std::vector<StoredTestSession> sessions_of_serial(const std::string& actuator_serial, const SessionListParts& parts) = 0;
+    [[nodiscard]] std::vector<StoredTestSession> sessions_of_tail(const std::string& tail_number) { return sessions_of_tail(tail_number, {}); }
+    [[nodiscard]] std::vector<StoredTestSession> sessions_of_serial(const std::string& actuator_serial) {
+        return sessions_of_serial(actuator_serial, {});
+    }
     /// Whether the serial has a session on a tail other than `tail_number`.
     [[nodiscard]] virtual bool serial_seen_elsewhere(const std::string& actuator_serial, const std::string& tail_number) = 0;
     /// As list_installations / list_installations_of_serial / list_discovery_findings.
@@ -41,8 +46,10 @@ public:
     explicit SqliteRecordSource(Database& db) : db_(db) {}
     [[nodiscard]] const std::string& name() const override { return db_.path(); }
     [[nodiscard]] std::vector<std::string> tail_numbers() override;
-    [[nodiscard]] std::vector<StoredTestSession> sessions_of_tail(const std::string& tail_number) override;
-    [[nodiscard]] std::vector<StoredTestSession> sessions_of_serial(const std::string& actuator_serial) override;
+    using RecordSource::sessions_of_serial;
+    using RecordSource::sessions_of_tail;
+    [[nodiscard]] std::vector<StoredTestSession> sessions_of_tail(const std::string& tail_number, const SessionListParts& parts) override;
+    [[nodiscard]] std::vector<StoredTestSession> sessions_of_serial(const std::string& actuator_serial, const SessionListParts& parts) override;
     [[nodiscard]] bool serial_seen_elsewhere(const std::string& actuator_serial, const std::string& tail_number) override;
     [[nodiscard]] std::vector<StoredInstallation> installations_of_tail(const std::string& tail_number) override;
     [[nodiscard]] std::vector<StoredInstallation> installations_of_serial(const std::string& actuator_serial) override;

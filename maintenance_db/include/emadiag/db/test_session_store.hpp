@@ -104,6 +104,16 @@ struct SessionReceipt {
 /// The sessions of one actuator serial on any tail, oldest first, as list_test_sessions gives them.
 [[nodiscard]] std::vector<StoredTestSession> list_sessions_of_serial(Database& db, const std::string& actuator_serial);
 
+/// What a listing loads besides each session's row and findings (a report of a tail with years of
+/// sessions needs neither artifacts nor runs: two queries fewer).
+struct SessionListParts {
+    bool artifacts = true;
+    bool runs = true;  ///< without samples or raw logs, with their estimates
+};
+[[nodiscard]] std::vector<StoredTestSession> list_test_sessions(Database& db, const std::string& tail_number, const SessionListParts& parts);
+[[nodiscard]] std::vector<StoredTestSession> list_sessions_of_serial(Database& db, const std::string& actuator_serial,
+                                                                     const SessionListParts& parts);
+
 /// The SHA-256 chaining `session` (its stored content, docs/record-format.md) to `prev_sha256`.
 /// Findings, estimates and artifacts are taken in their canonical order, so the value does not
 /// depend on the order they were given in.

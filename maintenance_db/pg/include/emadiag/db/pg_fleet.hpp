@@ -83,8 +83,10 @@ public:
     explicit PgRecordSource(const std::string& uri);
     [[nodiscard]] const std::string& name() const override { return pg_.uri(); }
     [[nodiscard]] std::vector<std::string> tail_numbers() override;
-    [[nodiscard]] std::vector<StoredTestSession> sessions_of_tail(const std::string& tail_number) override;
-    [[nodiscard]] std::vector<StoredTestSession> sessions_of_serial(const std::string& actuator_serial) override;
+    using RecordSource::sessions_of_serial;
+    using RecordSource::sessions_of_tail;
+    [[nodiscard]] std::vector<StoredTestSession> sessions_of_tail(const std::string& tail_number, const SessionListParts& parts) override;
+    [[nodiscard]] std::vector<StoredTestSession> sessions_of_serial(const std::string& actuator_serial, const SessionListParts& parts) override;
     [[nodiscard]] bool serial_seen_elsewhere(const std::string& actuator_serial, const std::string& tail_number) override;
     [[nodiscard]] std::vector<StoredInstallation> installations_of_tail(const std::string& tail_number) override;
     [[nodiscard]] std::vector<StoredInstallation> installations_of_serial(const std::string& actuator_serial) override;
@@ -94,7 +96,7 @@ public:
     [[nodiscard]] std::vector<PositionStatus> position_status() override;
 
 private:
-    std::vector<StoredTestSession> sessions_where(const std::string& where, const std::string& value);
+    std::vector<StoredTestSession> sessions_where(const std::string& where, const std::string& value, const SessionListParts& parts);
     PgConnection pg_;
 };
 
