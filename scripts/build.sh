@@ -21,6 +21,11 @@ case "$config" in
            -DCMAKE_CXX_COMPILER=clang++ -DEMADIAG_FUZZ=ON -DEMADIAG_NATIVE=OFF -DEMADIAG_BUILD_BENCH=OFF) ;;
   *) echo "build: unknown configuration '$config' (release or asan)" >&2; exit 2 ;;
 esac
+# A build-asan/ configured with GCC by an earlier version of this script: start it afresh.
+if [ "$config" = asan ] && [ -f "$dir/CMakeCache.txt" ] && ! grep -q '^CMAKE_CXX_COMPILER:[A-Z]*=.*clang' "$dir/CMakeCache.txt"; then
+  echo "build: $dir was configured with another compiler; configuring it afresh with clang"
+  rm -rf "$dir"
+fi
 cmake -S . -B "$dir" -G Ninja "${flags[@]}" "${launcher[@]}" >/dev/null
 if [ $# -gt 0 ]; then
   cmake --build "$dir" -j "$(nproc)" --target "$@"

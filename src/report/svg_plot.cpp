@@ -426,8 +426,12 @@ std::string SvgPlot::render() const {
         xr.add(0);
         xr.add(1);
     }
-    const auto [x_lo, x_hi] = axis_range(x_axis_, xr, "x");
-    const auto [y_lo, y_hi] = axis_range(y_axis_, yr, "y");
+    // Plain variables, not structured bindings: the lambdas below capture them (clang 14, the fuzz
+    // and sanitizer compiler, cannot capture a structured binding).
+    const std::pair<double, double> x_range = axis_range(x_axis_, xr, "x");
+    const std::pair<double, double> y_range = axis_range(y_axis_, yr, "y");
+    const double x_lo = x_range.first, x_hi = x_range.second;
+    const double y_lo = y_range.first, y_hi = y_range.second;
 
     // Legend entries, in drawing order of kinds.
     std::vector<LegendEntry> legend;
