@@ -32,7 +32,7 @@ sim --db a.db --tail N1EM --position LH-ELEV --sessions 6 --cycles-per-day 4 --f
 sim --db a.db --tail N1EM --position LH-ELEV --sessions 4 --serial NEW-1 --start-utc 2026-08-01T08:00:00Z --cycles-per-day 4 --cycles 800
 sim --db a.db --tail N2EM --position RH-ELEV --sessions 5 --days-between 20 --fsj-rate-per-100d 0.02
 sim --db b.db --tail N1EM --position RH-ELEV --sessions 6 --cycles-per-day 4 --seed 7
-sim --db c.db --tail N3EM --position LH-AIL --sessions 20 --days-between 5 --seed 3
+sim --db c.db --tail N3EM --position LH-AIL --sessions 60 --days-between 5 --seed 3
 # Discovery findings of N1EM (as `emadiag discover --tail` stores them): one open, one closed by a later entry.
 sqlite3 a.db "INSERT INTO discovery_findings(tail_number, position, actuator_serial, found_utc, summary, model_json, status, tool_version, content_sha256)
   VALUES ('N1EM', 'LH-ELEV', 'NEW-1', '2026-09-01T10:00:00Z', 'Stribeck term: +0.012 N m below 0.5 rad/s; RMS error 0.031 -> 0.012 A', '{}', 'open', 'test', lower(hex(randomblob(32)))),
@@ -92,8 +92,10 @@ na2=$(admin -c "SELECT count(*) FROM test_sessions WHERE station_role = 'station
 if [ $rc -eq 0 ] && grep -q ": 0 session(s) pushed" <<< "$out" && [ "$na2" = "$na" ]; then pass "re-sync pushes nothing: $out"
 else fail "re-sync: rc=$rc $out ($na2 vs $na)"; fi
 
+# 60 sessions in batches of 2: the sync runs for seconds, so the lock below is taken long before its end
+# however loaded the machine (with 20 in batches of 4 it could finish before the lock, and nothing was caught).
 # ---- 4. kill -9 in the middle of a sync transaction, then re-sync: nothing lost, nothing twice ----
-"$E" sync --db c.db --to "$(uri fleet station_c)" --batch 4 --verbose > sync_c1.txt 2>&1 & pc=$!
+"$E" sync --db c.db --to "$(uri fleet station_c)" --batch 2 --verbose > sync_c1.txt 2>&1 & pc=$!
 for _ in $(seq 1 200); do
   [ "$(admin -c "SELECT count(*) FROM test_sessions WHERE station_role = 'station_c'")" -ge 4 ] && break; sleep 0.05
 done

@@ -25,13 +25,17 @@ cleanup() {
 }
 trap cleanup EXIT
 
-# Every session has its 2 runs, each with samples and its raw log, and its findings.
+# check_db DB RUNS: every session has its RUNS runs (history-sim: 2, import: 1), each with samples
+# and its raw log, and its findings; prints the session count. A file killed before its schema was
+# committed (absent, or no table yet) holds 0 sessions.
 check_db() {
-  local db=$1 ic partial
+  local db=$1 runs=$2 ic partial
+  [ -s "$db" ] || { echo 0; return 0; }
   ic=$(sqlite3 "$db" "PRAGMA integrity_check")
   [ "$ic" = ok ] || { echo "integrity_check: $ic" >&2; return 1; }
+  [ "$(sqlite3 "$db" "SELECT COUNT(*) FROM sqlite_master")" != 0 ] || { echo 0; return 0; }
   partial=$(sqlite3 "$db" "SELECT COUNT(*) FROM test_sessions s WHERE
-      (SELECT COUNT(*) FROM runs r WHERE r.session_id = s.session_id) != 2
+      (SELECT COUNT(*) FROM runs r WHERE r.session_id = s.session_id) != $runs
       OR (SELECT COUNT(*) FROM findings f WHERE f.session_id = s.session_id) = 0
       OR EXISTS (SELECT 1 FROM runs r WHERE r.session_id = s.session_id AND
           (NOT EXISTS (SELECT 1 FROM samples m WHERE m.run_id = r.run_id)
@@ -52,30 +56,13 @@ for i in $(seq 1 "$kills"); do
   wait "$pid" 2>/dev/null || true
   [ -s "$db-journal" ] && hot=$((hot + 1))
   # The library's open (quick_check) must accept it too; sqlite3 rolls a hot journal back first.
-  n=$(check_db "$db") || { echo "kill $i: database damaged" >&2; exit 1; }
+  n=$(check_db "$db" 2) || { echo "kill $i: database damaged" >&2; exit 1; }
   [ "$n" -ge "$before" ] || { echo "kill $i: sessions went from $before to $n" >&2; exit 1; }
   before=$n
 done
 echo "kill -9: $kills kills, $hot interrupted a transaction (hot journal), $before whole sessions, integrity ok, no partial session"
 
 echo "== kill -9 of emadiag import at random points, $kills times =="
-# One imported run per session: its samples, its raw log (the run file as downloaded) and its findings.
-check_import_db() {
-  local db=$1 ic partial
-  # Killed before the schema was committed: no file, or a file with no table yet, holds 0 sessions.
-  [ -s "$db" ] || { echo 0; return 0; }
-  ic=$(sqlite3 "$db" "PRAGMA integrity_check")
-  [ "$ic" = ok ] || { echo "integrity_check: $ic" >&2; return 1; }
-  [ "$(sqlite3 "$db" "SELECT COUNT(*) FROM sqlite_master")" != 0 ] || { echo 0; return 0; }
-  partial=$(sqlite3 "$db" "SELECT COUNT(*) FROM test_sessions s WHERE
-      (SELECT COUNT(*) FROM runs r WHERE r.session_id = s.session_id) != 1
-      OR (SELECT COUNT(*) FROM findings f WHERE f.session_id = s.session_id) = 0
-      OR EXISTS (SELECT 1 FROM runs r WHERE r.session_id = s.session_id AND
-          (NOT EXISTS (SELECT 1 FROM samples m WHERE m.run_id = r.run_id)
-           OR NOT EXISTS (SELECT 1 FROM raw_logs l WHERE l.run_id = r.run_id)))")
-  [ "$partial" = 0 ] || { echo "$partial partial sessions" >&2; return 1; }
-  sqlite3 "$db" "SELECT COUNT(*) FROM test_sessions"
-}
 run=$work/import_run.csv
 "$emadiag" simulate --case B --sequence dyn --noise typical --seed 7 --out "$run" >/dev/null
 db=$work/import.db
@@ -95,7 +82,7 @@ for i in $(seq 1 "$kills"); do
   kill -9 "$pid" 2>/dev/null || true
   if wait "$pid" 2>/dev/null; then completed=$((completed + 1)); fi
   [ -s "$db-journal" ] && hot=$((hot + 1))
-  n=$(check_import_db "$db") || { echo "import kill $i: database damaged" >&2; exit 1; }
+  n=$(check_db "$db" 1) || { echo "import kill $i: database damaged" >&2; exit 1; }
   [ "$n" -ge "$before" ] && [ "$n" -le $((before + 1)) ] ||
     { echo "import kill $i: sessions went from $before to $n" >&2; exit 1; }
   before=$n
@@ -103,7 +90,7 @@ done
 # The database the kills left behind still takes a new import (the library's open check accepts it).
 "$emadiag" import "$run" --db "$db" --tail N123EM --position LH-ELEV --utc 2026-02-01T00:00:00Z >/dev/null ||
   { echo "import after the kills failed" >&2; exit 1; }
-n=$(check_import_db "$db") || { echo "import after the kills: database damaged" >&2; exit 1; }
+n=$(check_db "$db" 1) || { echo "import after the kills: database damaged" >&2; exit 1; }
 [ "$n" -eq $((before + 1)) ] || { echo "import after the kills: $before -> $n sessions" >&2; exit 1; }
 echo "kill -9 import: $kills kills over ${span_ms} ms, $completed finished before the kill, $hot interrupted a transaction (hot journal), $n whole sessions, integrity ok, no partial session"
 
@@ -117,7 +104,7 @@ if mount -t tmpfs -o size=2m tmpfs "$mnt" 2>/dev/null; then
   set -e
   [ "$rc" -ne 0 ] || { echo "full disk: history-sim succeeded on a full disk?" >&2; exit 1; }
   grep -q "database or disk is full" <<<"$out" || { echo "full disk: unclear error: $(tail -2 <<<"$out")" >&2; exit 1; }
-  n=$(check_db "$mnt/full.db") || { echo "full disk: database damaged" >&2; exit 1; }
+  n=$(check_db "$mnt/full.db" 2) || { echo "full disk: database damaged" >&2; exit 1; }
   echo "full disk: exit $rc, '$(grep -o 'database or disk is full' <<<"$out" | head -1)', $n whole sessions kept, integrity ok"
   umount "$mnt"
   mnt=""

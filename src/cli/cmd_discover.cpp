@@ -17,6 +17,7 @@
 #include "emadiag/db/record_store.hpp"
 #include "emadiag/sim/simulator.hpp"
 #include "emadiag/io/output_path.hpp"
+#include "emadiag/io/utc_now.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -250,12 +251,7 @@ const bool registered = register_command(Command{
                 f.tail_number = *tail;
                 for (const auto& r : runs)
                     if (f.actuator_serial.empty()) f.actuator_serial = r.meta_value("ema_serial_number").value_or("");
-                const std::time_t now = std::time(nullptr);
-                std::tm tm{};
-                gmtime_r(&now, &tm);
-                char buf[32];
-                std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-                f.found_utc = buf;
+                f.found_utc = io::utc_now_iso8601();
                 f.summary = record.summary;
                 f.model_json = record.model.dump();
                 const std::int64_t id = db::store_discovery_finding(database, f);

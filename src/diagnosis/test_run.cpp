@@ -9,6 +9,7 @@
 #include "core/run_summary.hpp"
 #include "emadiag/db/run_store.hpp"
 #include "emadiag/db/test_session_store.hpp"
+#include "emadiag/io/utc_now.hpp"
 
 #include <ctime>
 #include <fstream>
@@ -17,14 +18,7 @@
 namespace emadiag {
 namespace {
 
-std::string utc_now_iso8601() {
-    const std::time_t t = std::time(nullptr);
-    std::tm tm{};
-    gmtime_r(&t, &tm);
-    char buf[32];
-    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-    return buf;
-}
+using io::utc_now_iso8601;
 
 /// 2026-11-23T01:02:03Z -> 20261123T010203Z (file names).
 std::string compact(const std::string& iso) {

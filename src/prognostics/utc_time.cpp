@@ -1,6 +1,7 @@
 #include "prognostics/utc_time.hpp"
 
 #include "core/emadiag_error.hpp"
+#include "emadiag/io/utc_now.hpp"
 
 #include <chrono>
 #include <cmath>
@@ -137,9 +138,6 @@ std::string format_utc_time(double days_since_epoch) {
     return buf;
 }
 
-std::string now_utc_time() {
-    const auto s = std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch()).count();
-    return format_utc_time(static_cast<double>(s) / kSecondsPerDay);
-}
+std::string now_utc_time() { return io::utc_now_iso8601(); }
 
 }  // namespace emadiag::prognostics

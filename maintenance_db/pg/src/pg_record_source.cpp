@@ -108,6 +108,19 @@ std::vector<std::string> PgRecordSource::tail_numbers() {
     return out;
 }
 
+namespace {
+/// A PostgreSQL bigint[] literal ("{1,2,3}") of the ids of `rows`, for `= ANY($1::bigint[])`.
+template <class Row, class Id>
+std::string bigint_array(const std::vector<Row>& rows, Id id) {
+    std::string a = "{";
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+        if (i > 0) a += ',';
+        a += std::to_string(id(rows[i]));
+    }
+    return a + "}";
+}
+}  // namespace
+
 std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string& where, const std::string& value, const SessionListParts& parts) {
     std::vector<StoredTestSession> out;
     std::unordered_map<std::int64_t, std::size_t> index;
@@ -119,12 +132,7 @@ std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string&
     if (out.empty()) return out;
     // The rows of these sessions by their ids (index scans on each table's key), not by a join on the
     // condition: the planner's join over the whole fleet's findings is what a report cannot afford.
-    std::string id_array = "{";
-    for (std::size_t i = 0; i < out.size(); ++i) {
-        if (i > 0) id_array += ',';
-        id_array += std::to_string(out[i].session_id);
-    }
-    id_array += "}";
+    const std::string id_array = bigint_array(out, [](const StoredTestSession& s) { return s.session_id; });
     for (const auto& r : pg_.query("SELECT f.session_id, f.parameter, f.estimator, f.value, f.std_error, f.limit_value, f.limit_kind, f.status, "
                                    "f.note FROM findings f WHERE f.session_id = ANY($1::bigint[]) ORDER BY f.session_id, f.parameter, f.estimator",
                                    {id_array})) {
@@ -172,12 +180,7 @@ std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string&
         run_index[runs.back().run_id] = runs.size() - 1;
     }
     if (!runs.empty()) {
-        std::string run_array = "{";
-        for (std::size_t i = 0; i < runs.size(); ++i) {
-            if (i > 0) run_array += ',';
-            run_array += std::to_string(runs[i].run_id);
-        }
-        run_array += "}";
+        const std::string run_array = bigint_array(runs, [](const StoredRun& r) { return r.run_id; });
         for (const auto& r : pg_.query("SELECT e.run_id, e.estimator, e.parameter, e.value, e.std_error, e.identifiable, e.method, e.note "
                                        "FROM estimates e WHERE e.run_id = ANY($1::bigint[]) ORDER BY e.run_id, e.estimator, e.parameter",
                                        {run_array})) {

@@ -3,6 +3,7 @@
 #include "emadiag/db/pg_fleet.hpp"
 #include "emadiag/db/record_store.hpp"
 #include "emadiag/db/sha256.hpp"
+#include "emadiag/io/utc_now.hpp"
 
 #include <sqlite3.h>
 
@@ -32,14 +33,7 @@ std::string f(const std::string& s) { return copy_field(s); }
 std::string f(const std::optional<std::string>& s) { return copy_field(s); }
 std::int64_t to_i64(const std::string& s) { return static_cast<std::int64_t>(std::stoll(s)); }
 
-std::string now_iso() {
-    const std::time_t t = std::time(nullptr);
-    std::tm tm{};
-    gmtime_r(&t, &tm);
-    char buf[32];
-    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-    return buf;
-}
+std::string now_iso() { return io::utc_now_iso8601(); }
 
 // The station's utc_days (maintenance_db/src/test_session_store.cpp), for the summary terms.
 std::int64_t days_from_civil(int y, unsigned m, unsigned d) {
