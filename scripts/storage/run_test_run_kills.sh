@@ -49,7 +49,6 @@ stop_ema() {
   wait "$ema_pid" 2>/dev/null || true
   ema_pid=""
 }
-sessions() { [ -s "$db" ] && sqlite3 "$db" "SELECT COUNT(*) FROM test_sessions" 2>/dev/null || echo 0; }
 # Integrity and whole sessions in one sqlite3 call (every process start is costly in user-mode
 # Linux); prints the session count. The hash chain is verified by `emadiag verify` at the end.
 check_db() {
@@ -79,7 +78,7 @@ span_ms=$(( ($(date +%s%N) - t0) / 1000000 ))
 echo "one whole run: $span_ms ms"
 stop_ema
 completed=1
-before=$(sessions)
+before=$(check_db) || { echo "after the first run: database damaged" >&2; exit 1; }
 hot=0 recovered=0 already=0 empty=0
 for i in $(seq 1 "$kills"); do
   start_ema "$i"

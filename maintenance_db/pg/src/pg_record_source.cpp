@@ -147,7 +147,6 @@ std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string&
         f.note = text(r, 8);
         out[index.at(int_of(r, 0))].findings.push_back(std::move(f));
     }
-    if (!parts.artifacts && !parts.runs) return out;
     if (parts.artifacts)
         for (const auto& r : pg_.query("SELECT a.session_id, a.role, a.name, a.sha256 FROM session_artifacts a WHERE a.session_id = ANY($1::bigint[]) "
                                        "ORDER BY a.session_id, a.role, a.name",
