@@ -12,6 +12,9 @@ config=${1:-release}
 shift || true
 launcher=()
 command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+# Paths below the checkout hash as relative ones, so another clone of the same sources (CI's clean
+# clone, a git worktree) reuses the cache.
+export CCACHE_BASEDIR="$PWD"
 case "$config" in
   release) dir=build; flags=(-DCMAKE_BUILD_TYPE=Release) ;;
   asan)
