@@ -3,6 +3,7 @@
 # PGSOCK, PGWORK set by it). Each check prints PASS or FAIL with what it saw; any FAIL fails the run.
 set -uo pipefail
 E="$EMADIAG"
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 W="$PGWORK/t"; mkdir -p "$W"; cd "$W"
 fails=0
 pass() { echo "PASS: $*"; }
@@ -86,6 +87,15 @@ nd=$(admin -c "SELECT count(*) FROM discovery_findings d JOIN discovery_findings
 ni=$(admin -c "SELECT count(*) FROM installations WHERE tail_number = 'N1EM'")
 [ "$ni" = 3 ] && pass "installations synced: $ni on N1EM (LH-ELEV first serial, LH-ELEV change to NEW-1, RH-ELEV from station b)" || fail "installations: $ni"
 
+# The summary tables the server keeps per COPY statement equal the station's, double for double.
+for s in a b; do
+  if out="$(python3 "$here/compare_summaries.py" $s.db "$(uri fleet station_$s)")"; then pass "station $s: $out"; else fail "station $s: $out"; fi
+done
+
+seed="0.$(printf '%04d' $((RANDOM % 10000)))"
+if out="$(bash "$here/summary_equivalence.sh" "$seed" 2>&1)"; then pass "summaries per COPY statement = per row (schema 1), seed $seed: $(tr '\n' ';' <<< "$out")"
+else fail "summary equivalence, seed $seed: $out"; fi
+
 # ---- 3. a re-sync inserts nothing twice ----
 out="$("$E" sync --db a.db --to "$(uri fleet station_a)" 2>&1)"; rc=$?
 na2=$(admin -c "SELECT count(*) FROM test_sessions WHERE station_role = 'station_a'")
@@ -159,6 +169,7 @@ if grep -rqF -f "$PGWORK/passwords" "$PGWORK"/server.log sync_*.txt 2>/dev/null;
 
 # ---- 6. report, fleet and trend print the same from PostgreSQL as from SQLite, byte for byte ----
 "$E" sync --db a.db --to "$(uri fleet1 station_a)" > /dev/null || fail "sync to fleet1"
+if out="$(python3 "$here/compare_summaries.py" a.db "$(uri fleet1 station_a)")"; then pass "fleet1: $out"; else fail "fleet1: $out"; fi
 U="$(uri fleet1 station_a)"
 same() {  # label, then the command's arguments after --db
   local label="$1"; shift

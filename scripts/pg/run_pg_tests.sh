@@ -5,6 +5,7 @@
 #   scripts/pg/run_pg_tests.sh [EMADIAG_BINARY]     (default build/src/emadiag)
 #   scripts/pg/run_pg_tests.sh EMADIAG_BINARY --run CMD ARGS...   (CMD instead of the tests, e.g. the
 #       benchmark: scripts/pg/run_pg_bench.sh; it gets PGSOCK, PGWORK and the admin role fleet_admin)
+#   PG_SERVER_OPTS="-c name=value ..." adds server settings (the benchmark's memory and WAL sizes).
 # Run as root (CI): the server runs as the system user 'postgres' (made by the package) or, when
 # missing, as 'emadiag-pg' (created here). Run as another user: the server runs as that user.
 # Exit status: that of the tests; never skipped (no server binaries is a failure).
@@ -59,7 +60,7 @@ printf 'local all fleet_admin trust\nlocal all all scram-sha-256\n' > "$work/hba
 [ "$(id -u)" -eq 0 ] && chown "$server_user" "$work/hba.conf"
 touch "$work/server.log"; [ "$(id -u)" -eq 0 ] && chown "$server_user" "$work/server.log"
 "${as_server[@]}" "$pgbin/pg_ctl" -D "$work/data" -l "$work/server.log" -w -t 60 \
-  -o "-c listen_addresses='' -k $work/sock -c hba_file=$work/hba.conf -c fsync=off -c max_connections=40" start >/dev/null
+  -o "-c listen_addresses='' -k $work/sock -c hba_file=$work/hba.conf -c fsync=off -c max_connections=40 ${PG_SERVER_OPTS:-}" start >/dev/null
 echo "run_pg_tests: PostgreSQL $("$pgbin/postgres" --version | awk '{print $3}') as $server_user on socket $work/sock"
 
 export EMADIAG="$emadiag" PGSOCK="$work/sock" PGWORK="$work"

@@ -96,6 +96,23 @@ std::vector<PgConnection::Row> PgConnection::query(const std::string& sql, const
     return rows;
 }
 
+bool PgConnection::RowView::is_null(int column) const { return PQgetisnull(result_, row_, column) != 0; }
+std::string_view PgConnection::RowView::text(int column) const {
+    return {PQgetvalue(result_, row_, column), static_cast<std::size_t>(PQgetlength(result_, row_, column))};
+}
+
+void PgConnection::each_row(const std::string& sql, const std::vector<std::optional<std::string>>& params,
+                            const std::function<void(const RowView&)>& f) {
+    std::vector<const char*> values;
+    values.reserve(params.size());
+    for (const auto& p : params) values.push_back(p ? p->c_str() : nullptr);
+    Result res(PQexecParams(conn_, sql.c_str(), static_cast<int>(values.size()), nullptr, values.data(), nullptr, nullptr, 0));
+    const auto status = PQresultStatus(res.get());
+    if (status != PGRES_TUPLES_OK && status != PGRES_COMMAND_OK) fail(conn_, res.get(), short_sql(sql));
+    const int n = PQntuples(res.get());
+    for (int i = 0; i < n; ++i) f(RowView(res.get(), i));
+}
+
 void PgConnection::exec(const std::string& sql) {
     Result res(PQexec(conn_, sql.c_str()));
     const auto status = PQresultStatus(res.get());

@@ -4,41 +4,39 @@
 #include <algorithm>
 #include <charconv>
 #include <limits>
+#include <string_view>
 #include <tuple>
 #include <unordered_map>
 
 namespace emadiag::db {
 namespace {
 
-using Row = PgConnection::Row;
+using Row = PgConnection::RowView;
 
-const std::string& text(const Row& r, std::size_t c) {
-    static const std::string empty;
-    return r.at(c) ? *r[c] : empty;
-}
-std::optional<std::string> opt_text(const Row& r, std::size_t c) { return r.at(c); }
-double number(const std::string& s) {
+std::string text(const Row& r, int c) { return std::string(r.text(c)); }
+std::optional<std::string> opt_text(const Row& r, int c) { return r.is_null(c) ? std::nullopt : std::optional<std::string>(r.text(c)); }
+double number(std::string_view s) {
     double v = 0;
     const auto res = std::from_chars(s.data(), s.data() + s.size(), v);
     if (res.ec != std::errc() || res.ptr != s.data() + s.size()) {
         if (s == "NaN") return std::numeric_limits<double>::quiet_NaN();
         if (s == "Infinity") return std::numeric_limits<double>::infinity();
         if (s == "-Infinity") return -std::numeric_limits<double>::infinity();
-        throw DbError("fleet server: '" + s + "' is not a number");
+        throw DbError("fleet server: '" + std::string(s) + "' is not a number");
     }
     return v;
 }
-std::int64_t integer(const std::string& s) {
+std::int64_t integer(std::string_view s) {
     std::int64_t v = 0;
     const auto res = std::from_chars(s.data(), s.data() + s.size(), v);
-    if (res.ec != std::errc() || res.ptr != s.data() + s.size()) throw DbError("fleet server: '" + s + "' is not an integer");
+    if (res.ec != std::errc() || res.ptr != s.data() + s.size()) throw DbError("fleet server: '" + std::string(s) + "' is not an integer");
     return v;
 }
-double num(const Row& r, std::size_t c) { return number(text(r, c)); }
-std::int64_t int_of(const Row& r, std::size_t c) { return integer(text(r, c)); }
-std::optional<double> opt_num(const Row& r, std::size_t c) { return r.at(c) ? std::optional<double>(number(*r[c])) : std::nullopt; }
-std::optional<std::int64_t> opt_int(const Row& r, std::size_t c) { return r.at(c) ? std::optional<std::int64_t>(integer(*r[c])) : std::nullopt; }
-bool boolean(const Row& r, std::size_t c) { return text(r, c) == "t"; }
+double num(const Row& r, int c) { return number(r.text(c)); }
+std::int64_t int_of(const Row& r, int c) { return integer(r.text(c)); }
+std::optional<double> opt_num(const Row& r, int c) { return r.is_null(c) ? std::nullopt : std::optional<double>(number(r.text(c))); }
+std::optional<std::int64_t> opt_int(const Row& r, int c) { return r.is_null(c) ? std::nullopt : std::optional<std::int64_t>(integer(r.text(c))); }
+bool boolean(const Row& r, int c) { return r.text(c) == "t"; }
 
 constexpr const char* kSessionColumns =
     "s.session_id, s.tail_number, s.actuator_serial, s.phase, s.started_utc, s.tool_version, s.verdict, s.verdict_note, s.limits_json, "
@@ -95,7 +93,7 @@ StoredInstallation read_installation(const Row& r) {
 
 PgRecordSource::PgRecordSource(const std::string& uri) : pg_(uri) {
     const auto v = pg_.query("SELECT to_regclass('fleet_schema_version') IS NOT NULL");
-    if (text(v.at(0), 0) != "t")
+    if (v.at(0).at(0) != std::optional<std::string>("t"))
         throw DbError("fleet server " + uri + " has no emadiag schema (run `emadiag fleet-server --to URI` as its owner first)",
                       DbErrorKind::Invalid);
     // One snapshot for the whole report: a sync committing meanwhile shows entirely or not at all.
@@ -104,7 +102,7 @@ PgRecordSource::PgRecordSource(const std::string& uri) : pg_(uri) {
 
 std::vector<std::string> PgRecordSource::tail_numbers() {
     std::vector<std::string> out;
-    for (const auto& r : pg_.query("SELECT tail_number FROM aircraft ORDER BY tail_number")) out.push_back(text(r, 0));
+    pg_.each_row("SELECT tail_number FROM aircraft ORDER BY tail_number", {}, [&](const Row& r) { out.push_back(text(r, 0)); });
     return out;
 }
 
@@ -124,75 +122,79 @@ std::string bigint_array(const std::vector<Row>& rows, Id id) {
 std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string& where, const std::string& value, const SessionListParts& parts) {
     std::vector<StoredTestSession> out;
     std::unordered_map<std::int64_t, std::size_t> index;
-    for (const auto& r : pg_.query(std::string("SELECT ") + kSessionColumns + " WHERE " + where + " ORDER BY s.started_utc, s.session_id",
-                                   {value})) {
+    pg_.each_row(std::string("SELECT ") + kSessionColumns + " WHERE " + where + " ORDER BY s.started_utc, s.session_id", {value}, [&](const Row& r) {
         out.push_back(read_session(r));
         index[out.back().session_id] = out.size() - 1;
-    }
+    });
     if (out.empty()) return out;
     // The rows of these sessions by their ids (index scans on each table's key), not by a join on the
     // condition: the planner's join over the whole fleet's findings is what a report cannot afford.
     const std::string id_array = bigint_array(out, [](const StoredTestSession& s) { return s.session_id; });
-    for (const auto& r : pg_.query("SELECT f.session_id, f.parameter, f.estimator, f.value, f.std_error, f.limit_value, f.limit_kind, f.status, "
-                                   "f.note FROM findings f WHERE f.session_id = ANY($1::bigint[]) ORDER BY f.session_id, f.parameter, f.estimator",
-                                   {id_array})) {
-        StoredFinding f;
-        f.parameter = text(r, 1);
-        f.estimator = text(r, 2);
-        f.value = opt_num(r, 3);
-        f.std_error = opt_num(r, 4);
-        f.limit_value = opt_num(r, 5);
-        f.limit_kind = text(r, 6);
-        f.status = text(r, 7);
-        f.note = text(r, 8);
-        out[index.at(int_of(r, 0))].findings.push_back(std::move(f));
-    }
+    pg_.each_row(
+        "SELECT f.session_id, f.parameter, f.estimator, f.value, f.std_error, f.limit_value, f.limit_kind, f.status, "
+        "f.note FROM findings f WHERE f.session_id = ANY($1::bigint[]) ORDER BY f.session_id, f.parameter, f.estimator",
+        {id_array}, [&](const Row& r) {
+            StoredFinding f;
+            f.parameter = text(r, 1);
+            f.estimator = text(r, 2);
+            f.value = opt_num(r, 3);
+            f.std_error = opt_num(r, 4);
+            f.limit_value = opt_num(r, 5);
+            f.limit_kind = text(r, 6);
+            f.status = text(r, 7);
+            f.note = text(r, 8);
+            out[index.at(int_of(r, 0))].findings.push_back(std::move(f));
+        });
     if (parts.artifacts)
-        for (const auto& r : pg_.query("SELECT a.session_id, a.role, a.name, a.sha256 FROM session_artifacts a WHERE a.session_id = ANY($1::bigint[]) "
-                                       "ORDER BY a.session_id, a.role, a.name",
-                                       {id_array}))
-            out[index.at(int_of(r, 0))].artifacts.push_back({text(r, 1), text(r, 2), text(r, 3)});
+        pg_.each_row(
+            "SELECT a.session_id, a.role, a.name, a.sha256 FROM session_artifacts a WHERE a.session_id = ANY($1::bigint[]) "
+            "ORDER BY a.session_id, a.role, a.name",
+            {id_array}, [&](const Row& r) {
+                out[index.at(int_of(r, 0))].artifacts.push_back({text(r, 1), text(r, 2), text(r, 3)});
+            });
     if (!parts.runs) return out;
     std::vector<StoredRun> runs;
     std::unordered_map<std::int64_t, std::size_t> run_index;
-    for (const auto& r : pg_.query("SELECT r.run_id, r.tail_number, r.actuator_serial, r.started_utc, r.source, r.load_case, r.sequence, "
-                                   "r.k_t_nm_per_a, r.j_kgm2, r.tau, r.sample_period_s, r.valid, r.status_note, r.meta_json, r.session_id "
-                                   "FROM runs r WHERE r.session_id = ANY($1::bigint[]) ORDER BY r.run_id",
-                                   {id_array})) {
-        StoredRun run;
-        run.run_id = int_of(r, 0);
-        run.tail_number = text(r, 1);
-        run.actuator_serial = text(r, 2);
-        run.started_utc = text(r, 3);
-        run.source = text(r, 4);
-        run.load_case = text(r, 5);
-        run.sequence = text(r, 6);
-        run.k_t_nm_per_a = num(r, 7);
-        run.j_kgm2 = num(r, 8);
-        run.tau = num(r, 9);
-        run.sample_period_s = num(r, 10);
-        run.valid = boolean(r, 11);
-        run.status_note = text(r, 12);
-        run.meta_json = text(r, 13);
-        run.session_id = int_of(r, 14);
-        runs.push_back(std::move(run));
-        run_index[runs.back().run_id] = runs.size() - 1;
-    }
+    pg_.each_row(
+        "SELECT r.run_id, r.tail_number, r.actuator_serial, r.started_utc, r.source, r.load_case, r.sequence, "
+        "r.k_t_nm_per_a, r.j_kgm2, r.tau, r.sample_period_s, r.valid, r.status_note, r.meta_json, r.session_id "
+        "FROM runs r WHERE r.session_id = ANY($1::bigint[]) ORDER BY r.run_id",
+        {id_array}, [&](const Row& r) {
+            StoredRun run;
+            run.run_id = int_of(r, 0);
+            run.tail_number = text(r, 1);
+            run.actuator_serial = text(r, 2);
+            run.started_utc = text(r, 3);
+            run.source = text(r, 4);
+            run.load_case = text(r, 5);
+            run.sequence = text(r, 6);
+            run.k_t_nm_per_a = num(r, 7);
+            run.j_kgm2 = num(r, 8);
+            run.tau = num(r, 9);
+            run.sample_period_s = num(r, 10);
+            run.valid = boolean(r, 11);
+            run.status_note = text(r, 12);
+            run.meta_json = text(r, 13);
+            run.session_id = int_of(r, 14);
+            runs.push_back(std::move(run));
+            run_index[runs.back().run_id] = runs.size() - 1;
+        });
     if (!runs.empty()) {
         const std::string run_array = bigint_array(runs, [](const StoredRun& r) { return r.run_id; });
-        for (const auto& r : pg_.query("SELECT e.run_id, e.estimator, e.parameter, e.value, e.std_error, e.identifiable, e.method, e.note "
-                                       "FROM estimates e WHERE e.run_id = ANY($1::bigint[]) ORDER BY e.run_id, e.estimator, e.parameter",
-                                       {run_array})) {
-            StoredEstimate e;
-            e.estimator = text(r, 1);
-            e.parameter = text(r, 2);
-            e.value = opt_num(r, 3);
-            e.std_error = num(r, 4);
-            e.identifiable = boolean(r, 5);
-            e.method = text(r, 6);
-            e.note = text(r, 7);
-            runs[run_index.at(int_of(r, 0))].estimates.push_back(std::move(e));
-        }
+        pg_.each_row(
+            "SELECT e.run_id, e.estimator, e.parameter, e.value, e.std_error, e.identifiable, e.method, e.note "
+            "FROM estimates e WHERE e.run_id = ANY($1::bigint[]) ORDER BY e.run_id, e.estimator, e.parameter",
+            {run_array}, [&](const Row& r) {
+                StoredEstimate e;
+                e.estimator = text(r, 1);
+                e.parameter = text(r, 2);
+                e.value = opt_num(r, 3);
+                e.std_error = num(r, 4);
+                e.identifiable = boolean(r, 5);
+                e.method = text(r, 6);
+                e.note = text(r, 7);
+                runs[run_index.at(int_of(r, 0))].estimates.push_back(std::move(e));
+            });
     }
     for (auto& run : runs) out[index.at(*run.session_id)].runs.push_back(std::move(run));
     return out;
@@ -212,98 +214,101 @@ bool PgRecordSource::serial_seen_elsewhere(const std::string& serial, const std:
 std::vector<StoredInstallation> PgRecordSource::installations_of_tail(const std::string& tail_number) {
     check_tail_number(tail_number);
     std::vector<StoredInstallation> out;
-    for (const auto& r : pg_.query(std::string("SELECT ") + kInstallationColumns + " WHERE tail_number = $1 ORDER BY installation_id",
-                                   {tail_number}))
-        out.push_back(read_installation(r));
+    pg_.each_row(std::string("SELECT ") + kInstallationColumns + " WHERE tail_number = $1 ORDER BY installation_id", {tail_number},
+                 [&](const Row& r) { out.push_back(read_installation(r)); });
     return out;
 }
 std::vector<StoredInstallation> PgRecordSource::installations_of_serial(const std::string& serial) {
     std::vector<StoredInstallation> out;
-    for (const auto& r : pg_.query(std::string("SELECT ") + kInstallationColumns +
-                                       " WHERE to_serial = $1 OR from_serial = $1 ORDER BY installation_id",
-                                   {serial}))
-        out.push_back(read_installation(r));
+    pg_.each_row(std::string("SELECT ") + kInstallationColumns + " WHERE to_serial = $1 OR from_serial = $1 ORDER BY installation_id", {serial},
+                 [&](const Row& r) { out.push_back(read_installation(r)); });
     return out;
 }
 std::vector<StoredDiscoveryFinding> PgRecordSource::discovery_findings(const std::string& tail_number, bool open_only) {
     check_tail_number(tail_number);
     std::vector<StoredDiscoveryFinding> out;
-    for (const auto& r : pg_.query(std::string("SELECT d.finding_id, d.tail_number, d.position, coalesce(p.ata_reference, ''), "
-                                               "coalesce(p.description, ''), d.actuator_serial, d.found_utc, d.summary, d.model_json, "
-                                               "d.status, d.amends_finding_id, d.tool_version, d.content_sha256 FROM discovery_findings d "
-                                               "LEFT JOIN positions p ON p.position = d.position WHERE d.tail_number = $1") +
-                                       (open_only ? " AND d.status = 'open' AND NOT EXISTS (SELECT 1 FROM discovery_findings a WHERE "
-                                                    "a.amends_finding_id = d.finding_id)"
-                                                  : "") +
-                                       " ORDER BY d.found_utc, d.finding_id",
-                                   {tail_number})) {
-        StoredDiscoveryFinding f;
-        f.finding_id = int_of(r, 0);
-        f.tail_number = text(r, 1);
-        f.position = opt_text(r, 2);
-        f.position_ata = text(r, 3);
-        f.position_description = text(r, 4);
-        f.actuator_serial = text(r, 5);
-        f.found_utc = text(r, 6);
-        f.summary = text(r, 7);
-        f.model_json = text(r, 8);
-        f.status = text(r, 9);
-        f.amends_finding_id = opt_int(r, 10);
-        f.tool_version = text(r, 11);
-        f.content_sha256 = text(r, 12);
-        out.push_back(std::move(f));
-    }
+    pg_.each_row(std::string("SELECT d.finding_id, d.tail_number, d.position, coalesce(p.ata_reference, ''), "
+                             "coalesce(p.description, ''), d.actuator_serial, d.found_utc, d.summary, d.model_json, "
+                             "d.status, d.amends_finding_id, d.tool_version, d.content_sha256 FROM discovery_findings d "
+                             "LEFT JOIN positions p ON p.position = d.position WHERE d.tail_number = $1") +
+                     (open_only ? " AND d.status = 'open' AND NOT EXISTS (SELECT 1 FROM discovery_findings a WHERE "
+                                  "a.amends_finding_id = d.finding_id)"
+                                : "") +
+                     " ORDER BY d.found_utc, d.finding_id",
+                 {tail_number}, [&](const Row& r) {
+                     StoredDiscoveryFinding f;
+                     f.finding_id = int_of(r, 0);
+                     f.tail_number = text(r, 1);
+                     f.position = opt_text(r, 2);
+                     f.position_ata = text(r, 3);
+                     f.position_description = text(r, 4);
+                     f.actuator_serial = text(r, 5);
+                     f.found_utc = text(r, 6);
+                     f.summary = text(r, 7);
+                     f.model_json = text(r, 8);
+                     f.status = text(r, 9);
+                     f.amends_finding_id = opt_int(r, 10);
+                     f.tool_version = text(r, 11);
+                     f.content_sha256 = text(r, 12);
+                     out.push_back(std::move(f));
+                 });
     return out;
 }
 std::vector<StoredPosition> PgRecordSource::positions() {
     std::vector<StoredPosition> out;
-    for (const auto& r : pg_.query("SELECT position, ata_reference, description FROM positions ORDER BY position"))
+    pg_.each_row("SELECT position, ata_reference, description FROM positions ORDER BY position", {}, [&](const Row& r) {
         out.push_back({text(r, 0), text(r, 1), text(r, 2)});
+    });
     return out;
 }
 std::vector<SeriesStats> PgRecordSource::series_stats() {
     std::vector<SeriesStats> out;
-    for (const auto& r : pg_.query("SELECT tail_number, position, actuator_serial, parameter, n, first_days, last_days, s_w, s_wt, s_wtt, "
-                                   "s_wy, s_wty, s_wyy, n_cycles, first_cycles, last_cycles, c_w, c_wt, c_wtt, c_wy, c_wty, c_wyy, "
-                                   "last_session_id, last_value, last_std_error, limit_kind, limit_value FROM series_stats "
-                                   "ORDER BY tail_number, position, actuator_serial, parameter")) {
-        SeriesStats s;
-        s.tail_number = text(r, 0);
-        s.position = text(r, 1);
-        s.actuator_serial = text(r, 2);
-        s.parameter = text(r, 3);
-        s.n = int_of(r, 4);
-        s.first_days = num(r, 5);
-        s.last_days = num(r, 6);
-        s.s_w = num(r, 7);
-        s.s_wt = num(r, 8);
-        s.s_wtt = num(r, 9);
-        s.s_wy = num(r, 10);
-        s.s_wty = num(r, 11);
-        s.s_wyy = num(r, 12);
-        s.n_cycles = int_of(r, 13);
-        s.first_cycles = opt_num(r, 14);
-        s.last_cycles = opt_num(r, 15);
-        s.c_w = num(r, 16);
-        s.c_wt = num(r, 17);
-        s.c_wtt = num(r, 18);
-        s.c_wy = num(r, 19);
-        s.c_wty = num(r, 20);
-        s.c_wyy = num(r, 21);
-        s.last_session_id = int_of(r, 22);
-        s.last_value = num(r, 23);
-        s.last_std_error = num(r, 24);
-        s.limit_kind = text(r, 25);
-        s.limit_value = opt_num(r, 26);
-        out.push_back(std::move(s));
-    }
+    pg_.each_row(
+        "SELECT tail_number, position, actuator_serial, parameter, n, first_days, last_days, s_w, s_wt, s_wtt, "
+        "s_wy, s_wty, s_wyy, n_cycles, first_cycles, last_cycles, c_w, c_wt, c_wtt, c_wy, c_wty, c_wyy, "
+        "last_session_id, last_value, last_std_error, limit_kind, limit_value FROM series_stats "
+        "ORDER BY tail_number, position, actuator_serial, parameter",
+        {}, [&](const Row& r) {
+            SeriesStats s;
+            s.tail_number = text(r, 0);
+            s.position = text(r, 1);
+            s.actuator_serial = text(r, 2);
+            s.parameter = text(r, 3);
+            s.n = int_of(r, 4);
+            s.first_days = num(r, 5);
+            s.last_days = num(r, 6);
+            s.s_w = num(r, 7);
+            s.s_wt = num(r, 8);
+            s.s_wtt = num(r, 9);
+            s.s_wy = num(r, 10);
+            s.s_wty = num(r, 11);
+            s.s_wyy = num(r, 12);
+            s.n_cycles = int_of(r, 13);
+            s.first_cycles = opt_num(r, 14);
+            s.last_cycles = opt_num(r, 15);
+            s.c_w = num(r, 16);
+            s.c_wt = num(r, 17);
+            s.c_wtt = num(r, 18);
+            s.c_wy = num(r, 19);
+            s.c_wty = num(r, 20);
+            s.c_wyy = num(r, 21);
+            s.last_session_id = int_of(r, 22);
+            s.last_value = num(r, 23);
+            s.last_std_error = num(r, 24);
+            s.limit_kind = text(r, 25);
+            s.limit_value = opt_num(r, 26);
+            out.push_back(std::move(s));
+        });
     return out;
 }
 std::vector<PositionStatus> PgRecordSource::position_status() {
     std::vector<PositionStatus> out;
-    for (const auto& r : pg_.query("SELECT tail_number, position, actuator_serial, sessions, last_session_id, last_utc, last_verdict, "
-                                   "last_cycles FROM position_status ORDER BY tail_number, position"))
-        out.push_back({text(r, 0), text(r, 1), text(r, 2), int_of(r, 3), int_of(r, 4), text(r, 5), text(r, 6), opt_int(r, 7)});
+    pg_.each_row(
+        "SELECT tail_number, position, actuator_serial, sessions, last_session_id, last_utc, last_verdict, "
+        "last_cycles FROM position_status ORDER BY tail_number, position",
+        {}, [&](const Row& r) {
+            out.push_back({text(r, 0), text(r, 1), text(r, 2), int_of(r, 3), int_of(r, 4), text(r, 5), text(r, 6), opt_int(r, 7)});
+        });
     return out;
 }
 

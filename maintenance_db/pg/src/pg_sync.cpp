@@ -35,6 +35,16 @@ std::int64_t to_i64(const std::string& s) { return static_cast<std::int64_t>(std
 
 std::string now_iso() { return io::utc_now_iso8601(); }
 
+/// One element of a PostgreSQL array literal: quoted, with '"' and '\\' escaped.
+std::string array_element(const std::string& s) {
+    std::string out = "\"";
+    for (char c : s) {
+        if (c == '"' || c == '\\') out += '\\';
+        out += c;
+    }
+    return out + '"';
+}
+
 // The station's utc_days (maintenance_db/src/test_session_store.cpp), for the summary terms.
 std::int64_t days_from_civil(int y, unsigned m, unsigned d) {
     y -= m <= 2 ? 1 : 0;
@@ -226,16 +236,28 @@ private:
         return ids;
     }
 
+    /// The batch's tails and positions on the server (three statements, whatever their number).
     void register_places(const std::set<std::string>& tails, const std::map<std::string, std::pair<std::string, std::string>>& positions) {
-        for (const auto& t : tails) pg_.query("INSERT INTO aircraft(tail_number) VALUES ($1) ON CONFLICT DO NOTHING", {t});
-        for (const auto& [p, ad] : positions) {
-            pg_.query("INSERT INTO positions(position, ata_reference, description) VALUES ($1, $2, $3) ON CONFLICT DO NOTHING",
-                      {p, ad.first, ad.second});
-            const auto r = pg_.query("SELECT ata_reference FROM positions WHERE position = $1", {p});
-            if (r.empty() || r[0][0] != ad.first)
-                throw DbError("position " + p + " is recorded on " + server_ + " with ATA reference " +
-                                  (r.empty() ? std::string("?") : r[0][0].value_or("?")) +
-                                  ", in " + db_.path() + " with " + ad.first + ": a position keeps its ATA reference",
+        if (!tails.empty()) {
+            std::string a;
+            for (const auto& t : tails) a += (a.empty() ? "" : ",") + array_element(t);
+            pg_.query("INSERT INTO aircraft(tail_number) SELECT unnest($1::text[]) ON CONFLICT DO NOTHING", {"{" + a + "}"});
+        }
+        if (positions.empty()) return;
+        std::string p, ata, desc;
+        for (const auto& [name, ad] : positions) {
+            p += (p.empty() ? "" : ",") + array_element(name);
+            ata += (ata.empty() ? "" : ",") + array_element(ad.first);
+            desc += (desc.empty() ? "" : ",") + array_element(ad.second);
+        }
+        pg_.query("INSERT INTO positions(position, ata_reference, description) SELECT * FROM unnest($1::text[], $2::text[], $3::text[]) "
+                  "ON CONFLICT DO NOTHING",
+                  {"{" + p + "}", "{" + ata + "}", "{" + desc + "}"});
+        for (const auto& r : pg_.query("SELECT position, ata_reference FROM positions WHERE position = ANY($1::text[])", {"{" + p + "}"})) {
+            const auto& [want_ata, want_desc] = positions.at(*r[0]);
+            if (r[1] != want_ata)
+                throw DbError("position " + *r[0] + " is recorded on " + server_ + " with ATA reference " + r[1].value_or("?") + ", in " +
+                                  db_.path() + " with " + want_ata + ": a position keeps its ATA reference",
                               DbErrorKind::Invalid);
         }
     }

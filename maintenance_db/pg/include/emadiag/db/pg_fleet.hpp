@@ -11,9 +11,11 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 struct pg_conn;
+struct pg_result;
 
 namespace emadiag::db {
 
@@ -35,6 +37,19 @@ public:
     /// Rows of a query with text parameters (std::nullopt: NULL); every value as text, NULL as nullopt.
     using Row = std::vector<std::optional<std::string>>;
     std::vector<Row> query(const std::string& sql, const std::vector<std::optional<std::string>>& params = {});
+    /// One row of a result, read in place (no copy of the result): valid during the call of each_row only.
+    class RowView {
+    public:
+        RowView(const pg_result* result, int row) : result_(result), row_(row) {}
+        [[nodiscard]] bool is_null(int column) const;
+        [[nodiscard]] std::string_view text(int column) const;  ///< "" for NULL
+    private:
+        const pg_result* result_;
+        int row_;
+    };
+    /// As query, but hands each row to `f` where it lies in libpq's result (a report reads thousands
+    /// of rows: no vector of strings in between).
+    void each_row(const std::string& sql, const std::vector<std::optional<std::string>>& params, const std::function<void(const RowView&)>& f);
     void exec(const std::string& sql);
     /// COPY table (columns) FROM STDIN: rows given as text-format lines through `fill`, which calls
     /// `put` as often as it likes (sent on in pieces of about 1 MiB, so memory stays bounded).
