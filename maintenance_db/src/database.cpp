@@ -79,7 +79,14 @@ Database::Database(const std::string& path, int busy_timeout_ms, bool quick_chec
             }
         }
     }
-    const int rc = sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr);
+    // SQLite's memory statistics take a global mutex around every allocation it makes (a bulk store
+    // makes millions); emadiag reads none of them. Configurable only before SQLite initialises: a
+    // later call is refused (SQLITE_MISUSE) and changes nothing.
+    static const int kMemStatusOff = sqlite3_config(SQLITE_CONFIG_MEMSTATUS, 0);
+    (void)kMemStatusOff;
+    // A connection belongs to one Database object, used by one thread at a time (never shared
+    // between threads): no per-call connection mutex (SQLite's multi-thread mode).
+    const int rc = sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_NOMUTEX, nullptr);
     if (rc != SQLITE_OK) {
         const std::string msg = db_ != nullptr ? sqlite3_errmsg(db_) : sqlite3_errstr(rc);
         sqlite3_close(db_);
@@ -293,6 +300,12 @@ Statement& Statement::bind_blob(int index, std::string_view bytes) {
     check_bind(sqlite3_bind_blob64(stmt_, index, bytes.data(), bytes.size(), SQLITE_TRANSIENT), db_, index, sql_);
     return *this;
 }
+Statement& Statement::bind_view(int index, std::string_view value) {
+    // A null data pointer would bind SQL NULL, not the empty text.
+    const char* text = value.data() != nullptr ? value.data() : "";
+    check_bind(sqlite3_bind_text(stmt_, index, text, static_cast<int>(value.size()), SQLITE_STATIC), db_, index, sql_);
+    return *this;
+}
 Statement& Statement::bind_null(int index) {
     check_bind(sqlite3_bind_null(stmt_, index), db_, index, sql_);
     return *this;
@@ -321,6 +334,11 @@ std::string Statement::column_text(int col) const {
     const auto* p = sqlite3_column_blob(stmt_, col);
     const int n = sqlite3_column_bytes(stmt_, col);
     return p != nullptr ? std::string(static_cast<const char*>(p), static_cast<std::size_t>(n)) : std::string();
+}
+std::string_view Statement::column_view(int col) const {
+    const auto* p = sqlite3_column_blob(stmt_, col);
+    const int n = sqlite3_column_bytes(stmt_, col);
+    return p != nullptr ? std::string_view(static_cast<const char*>(p), static_cast<std::size_t>(n)) : std::string_view();
 }
 bool Statement::column_is_null(int col) const { return sqlite3_column_type(stmt_, col) == SQLITE_NULL; }
 

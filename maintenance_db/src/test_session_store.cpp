@@ -52,10 +52,15 @@ std::string one_of(const std::array<std::string_view, N>& allowed) {
 }
 
 template <std::size_t N>
-void check_one_of(const std::string& value, const std::array<std::string_view, N>& allowed, const std::string& field) {
-    if (std::find(allowed.begin(), allowed.end(), value) == allowed.end()) {
-        throw DbError(field + " is '" + value + "': use " + one_of(allowed), DbErrorKind::Invalid);
-    }
+bool is_one_of(std::string_view value, const std::array<std::string_view, N>& allowed) {
+    return std::find(allowed.begin(), allowed.end(), value) != allowed.end();
+}
+
+/// Throws unless `value` is one of `allowed`; `field()` names it (built only for the message: the
+/// bulk store checks millions of values).
+template <std::size_t N, typename Field>
+void check_one_of(const std::string& value, const std::array<std::string_view, N>& allowed, const Field& field) {
+    if (!is_one_of(value, allowed)) throw DbError(field() + " is '" + value + "': use " + one_of(allowed), DbErrorKind::Invalid);
 }
 
 bool is_iso_date_time(const std::string& text) {
@@ -75,36 +80,41 @@ bool is_sha256_hex(const std::string& s) {
 
 void invalid(const std::string& message) { throw DbError(message, DbErrorKind::Invalid); }
 
-void check_optional_finite(const std::optional<double>& v, const std::string& field) {
-    if (v && !std::isfinite(*v)) invalid(field + " is not a finite number (" + std::to_string(*v) + ")");
+template <typename Field>
+void check_optional_finite(const std::optional<double>& v, const Field& field) {
+    if (v && !std::isfinite(*v)) invalid(field() + " is not a finite number (" + std::to_string(*v) + ")");
 }
 
 void check_session(const StoredTestSession& s) {
-    const std::string where = "test session: ";
-    if (const auto problem = detail::tail_number_problem(s.tail_number)) invalid(where + *problem);
-    check_one_of(s.phase, kPhases, where + "phase");
-    check_one_of(s.verdict, kVerdicts, where + "verdict");
+    // The messages are built only when a check fails (this runs once per stored session).
+    const std::string_view where = "test session: ";
+    const auto named = [&where](const char* field) { return [&where, field] { return std::string(where) + field; }; };
+    if (const auto problem = detail::tail_number_problem(s.tail_number)) invalid(std::string(where) + *problem);
+    check_one_of(s.phase, kPhases, named("phase"));
+    check_one_of(s.verdict, kVerdicts, named("verdict"));
     if (!is_iso_date_time(s.started_utc)) {
-        invalid(where + "started_utc '" + s.started_utc + "' is not an ISO 8601 UTC time (" + std::string(kIsoDateTimePattern) + "...)");
+        invalid(std::string(where) + "started_utc '" + s.started_utc + "' is not an ISO 8601 UTC time (" + std::string(kIsoDateTimePattern) +
+                "...)");
     }
     if (s.position) {
-        if (const auto problem = position_problem(*s.position)) invalid(where + *problem);
-        if (const auto problem = ata_reference_problem(s.position_ata)) invalid(where + "position " + *s.position + ": " + *problem);
+        if (const auto problem = position_problem(*s.position)) invalid(std::string(where) + *problem);
+        if (const auto problem = ata_reference_problem(s.position_ata)) invalid(std::string(where) + "position " + *s.position + ": " + *problem);
     }
-    if (s.cycles && *s.cycles < 0) invalid(where + "cycles " + std::to_string(*s.cycles) + " is negative");
-    check_optional_finite(s.hours_h, where + "hours_h");
-    if (s.hours_h && *s.hours_h < 0) invalid(where + "hours_h " + std::to_string(*s.hours_h) + " is negative");
+    if (s.cycles && *s.cycles < 0) invalid(std::string(where) + "cycles " + std::to_string(*s.cycles) + " is negative");
+    check_optional_finite(s.hours_h, named("hours_h"));
+    if (s.hours_h && *s.hours_h < 0) invalid(std::string(where) + "hours_h " + std::to_string(*s.hours_h) + " is negative");
     if (s.amends_session_id.has_value() == s.correction_reason.empty())
-        invalid(where + (s.amends_session_id ? "a correction (amends session " + std::to_string(*s.amends_session_id) + ") needs a reason"
-                                             : std::string("correction_reason '") + s.correction_reason + "' without amends_session_id"));
+        invalid(std::string(where) +
+                (s.amends_session_id ? "a correction (amends session " + std::to_string(*s.amends_session_id) + ") needs a reason"
+                                     : std::string("correction_reason '") + s.correction_reason + "' without amends_session_id"));
     for (std::size_t i = 0; i < s.artifacts.size(); ++i) {
         const auto& a = s.artifacts[i];
-        const std::string context = where + "artifact " + std::to_string(i) + " (" + a.name + "): ";
-        check_one_of(a.role, kArtifactRoles, context + "role");
-        if (a.name.empty()) invalid(context + "name is empty");
-        if (!is_sha256_hex(a.sha256)) invalid(context + "sha256 '" + a.sha256 + "' is not 64 lowercase hex digits");
+        const auto context = [&] { return std::string(where) + "artifact " + std::to_string(i) + " (" + a.name + "): "; };
+        check_one_of(a.role, kArtifactRoles, [&] { return context() + "role"; });
+        if (a.name.empty()) invalid(context() + "name is empty");
+        if (!is_sha256_hex(a.sha256)) invalid(context() + "sha256 '" + a.sha256 + "' is not 64 lowercase hex digits");
         for (std::size_t j = 0; j < i; ++j)
-            if (s.artifacts[j].role == a.role && s.artifacts[j].name == a.name) invalid(context + "duplicate of artifact " + std::to_string(j));
+            if (s.artifacts[j].role == a.role && s.artifacts[j].name == a.name) invalid(context() + "duplicate of artifact " + std::to_string(j));
     }
     for (std::size_t i = 0; i < s.runs.size(); ++i) {
         const std::string context = "test session run " + std::to_string(i) + ": ";
@@ -115,23 +125,23 @@ void check_session(const StoredTestSession& s) {
     }
     for (std::size_t i = 0; i < s.findings.size(); ++i) {
         const auto& f = s.findings[i];
-        const std::string context = "test session finding " + std::to_string(i) + " (" + f.parameter + "/" + f.estimator + "): ";
-        if (f.parameter.empty()) invalid(context + "parameter is empty");
-        if (f.estimator.empty()) invalid(context + "estimator is empty");
-        if (f.status.empty()) invalid(context + "status is empty");
-        check_optional_finite(f.value, context + "value");
-        check_optional_finite(f.std_error, context + "std_error");
-        if (f.std_error && *f.std_error < 0) invalid(context + "std_error " + std::to_string(*f.std_error) + " is negative");
-        check_one_of(f.limit_kind, kLimitKinds, context + "limit_kind");
-        check_optional_finite(f.limit_value, context + "limit_value");
+        const auto context = [&] { return "test session finding " + std::to_string(i) + " (" + f.parameter + "/" + f.estimator + "): "; };
+        if (f.parameter.empty()) invalid(context() + "parameter is empty");
+        if (f.estimator.empty()) invalid(context() + "estimator is empty");
+        if (f.status.empty()) invalid(context() + "status is empty");
+        check_optional_finite(f.value, [&] { return context() + "value"; });
+        check_optional_finite(f.std_error, [&] { return context() + "std_error"; });
+        if (f.std_error && *f.std_error < 0) invalid(context() + "std_error " + std::to_string(*f.std_error) + " is negative");
+        check_one_of(f.limit_kind, kLimitKinds, [&] { return context() + "limit_kind"; });
+        check_optional_finite(f.limit_value, [&] { return context() + "limit_value"; });
         if ((f.limit_kind == kNoLimit) == f.limit_value.has_value()) {
-            invalid(context + "limit_kind '" + f.limit_kind + "' " +
+            invalid(context() + "limit_kind '" + f.limit_kind + "' " +
                     (f.limit_value ? "with limit_value " + std::to_string(*f.limit_value) : std::string("without a limit_value")) +
                     ": a 'max' or 'min' limit has a value, 'none' has none");
         }
         for (std::size_t j = 0; j < i; ++j) {
             if (s.findings[j].parameter == f.parameter && s.findings[j].estimator == f.estimator) {
-                invalid(context + "duplicate of finding " + std::to_string(j) + ": each (parameter, estimator) is found once per session");
+                invalid(context() + "duplicate of finding " + std::to_string(j) + ": each (parameter, estimator) is found once per session");
             }
         }
     }
@@ -145,13 +155,6 @@ void bind_optional(Statement& st, int index, const std::optional<double>& v) {
     }
 }
 void bind_optional(Statement& st, int index, const std::optional<std::int64_t>& v) {
-    if (v) {
-        st.bind(index, *v);
-    } else {
-        st.bind_null(index);
-    }
-}
-void bind_optional(Statement& st, int index, const std::optional<std::string>& v) {
     if (v) {
         st.bind(index, *v);
     } else {
@@ -238,14 +241,21 @@ std::vector<StoredTestSession> list_where(Database& db, const std::string& where
     }
     if (out.empty()) return out;
     {
+        // The findings in the sessions' order, each session's by (parameter, estimator) as
+        // load_test_session gives them: the session index (tail or serial, then time) and the
+        // findings' primary key deliver that order, so SQLite sorts nothing, and the rows arrive
+        // session by session (the map is a fallback for a session met out of turn).
         Statement st(db, std::string("SELECT f.session_id, ") + kFindingColumns +
-                             " FROM test_sessions s JOIN findings f ON f.session_id = s.session_id WHERE " + where);
+                             " FROM test_sessions s JOIN findings f ON f.session_id = s.session_id WHERE " + where +
+                             " ORDER BY s.started_utc, s.session_id, f.parameter, f.estimator");
         st.bind(1, value);
-        while (st.step()) out[index.at(st.column_int(0))].findings.push_back(read_finding(st, 1));
-        // In the order load_test_session gives (no ORDER BY: sorting every finding of a tail in SQL costs more).
-        for (auto& s : out)
-            std::sort(s.findings.begin(), s.findings.end(),
-                      [](const auto& a, const auto& b) { return std::tie(a.parameter, a.estimator) < std::tie(b.parameter, b.estimator); });
+        std::size_t at = 0;
+        while (st.step()) {
+            const std::int64_t id = st.column_int(0);
+            while (at < out.size() && out[at].session_id != id) ++at;
+            if (at == out.size()) at = index.at(id);
+            out[at].findings.push_back(read_finding(st, 1));
+        }
     }
     if (parts.artifacts) {
         Statement st(db, "SELECT a.session_id, a.role, a.name, a.sha256 FROM test_sessions s JOIN session_artifacts a ON a.session_id = "
@@ -308,7 +318,15 @@ int64_t days_from_civil(int y, unsigned m, unsigned d) {
 
 /// Days since 1970 of "YYYY-MM-DDThh:mm:ss..." (checked by check_session; fractions of a second ignored).
 double utc_days(const std::string& iso) {
-    const auto n = [&](std::size_t at, std::size_t len) { return std::stoi(iso.substr(at, len)); };
+    // Read in place, no substrings (a session checked by check_session passes at once; one sealed
+    // by the migration to version 3 was stored before these checks).
+    const bool checked = is_iso_date_time(iso);
+    const auto n = [&](std::size_t at, std::size_t len) {
+        if (!checked) return std::stoi(iso.substr(at, len));
+        int v = 0;
+        for (std::size_t i = at; i < at + len; ++i) v = v * 10 + (iso[i] - '0');
+        return v;
+    };
     return static_cast<double>(days_from_civil(n(0, 4), static_cast<unsigned>(n(5, 2)), static_cast<unsigned>(n(8, 2)))) +
            (n(11, 2) * 3600.0 + n(14, 2) * 60.0 + n(17, 2)) / 86400.0;
 }
@@ -324,17 +342,42 @@ struct Batch {
         std::int64_t session_id = 0, added = 0;
         std::string sha;
     };
-    std::map<std::tuple<std::string, std::string, std::string, std::string>, std::optional<SeriesStats>> series;
+    /// (tail, position, serial) -> parameter -> its series_stats row (none: not stored yet). Two
+    /// levels: a session's parameters share the first key, looked up once per session.
+    std::map<std::tuple<std::string, std::string, std::string>, std::map<std::string, std::optional<SeriesStats>>> series;
     std::map<std::pair<std::string, std::string>, std::optional<PositionStatus>> positions;
     std::unordered_map<std::string, Head> heads;
     std::unordered_map<std::string, std::string> head_before;  ///< tail -> its stored head ("" none)
     std::unordered_map<std::string, bool> tails_known;
     std::unordered_map<std::string, std::string> position_ata;  ///< position -> its ATA reference, checked or registered
+    /// The last limits text hashed and its SHA-256 (a fleet's sessions share their limits).
+    std::string limits_json, limits_sha256;
+    /// The insert statements, fetched from the connection's cache once per transaction.
+    Statement *insert_aircraft = nullptr, *insert_session = nullptr, *insert_finding = nullptr, *insert_artifact = nullptr;
 };
 
-std::optional<SeriesStats>& series_row(Database& db, Batch& b, const std::string& tail, const std::string& position,
-                                       const std::string& serial, const std::string& parameter) {
-    auto [it, fresh] = b.series.try_emplace({tail, position, serial, parameter});
+/// The statement in `slot` reset and unbound, prepared (or taken from the connection's cache) the
+/// first time.
+Statement& prepared(Database& db, Statement*& slot, const char* sql) {
+    if (slot == nullptr) {
+        slot = &db.cached(sql);
+    } else {
+        slot->reset();
+    }
+    return *slot;
+}
+
+const std::string& limits_sha256_of(Batch& b, const std::string& limits_json) {
+    if (b.limits_sha256.empty() || b.limits_json != limits_json) {
+        b.limits_json = limits_json;
+        b.limits_sha256 = sha256_hex(limits_json);
+    }
+    return b.limits_sha256;
+}
+
+std::optional<SeriesStats>& series_row(Database& db, std::map<std::string, std::optional<SeriesStats>>& group, const std::string& tail,
+                                       const std::string& position, const std::string& serial, const std::string& parameter) {
+    auto [it, fresh] = group.try_emplace(parameter);
     if (fresh) {
         it->second = detail::find_series_stats(db, tail, position, serial, parameter);
     }
@@ -352,13 +395,15 @@ std::optional<PositionStatus>& position_row(Database& db, Batch& b, const std::s
 void add_to_summaries(Database& db, Batch& b, const StoredTestSession& s, std::int64_t session_id, int sign) {
     const double days = utc_days(s.started_utc);
     const std::string position = s.position.value_or("");
-    for (const auto& m : session_measurements(s.findings)) {
+    const auto measurements = session_measurements(s.findings);
+    auto& group = measurements.empty() ? b.series[{}] : b.series[{s.tail_number, position, s.actuator_serial}];
+    for (const auto& m : measurements) {
         const double w = sign / (m.std_error * m.std_error);
         // The session's own sums, t = 0 at its own time (days and cycles).
         const bool has_cycles = s.cycles.has_value();
         const double e_cycles = has_cycles ? static_cast<double>(*s.cycles) : 0.0;
         const double e_cw = has_cycles ? w : 0.0, e_cwy = has_cycles ? w * m.value : 0.0, e_cwyy = has_cycles ? w * m.value * m.value : 0.0;
-        std::optional<SeriesStats>& row = series_row(db, b, s.tail_number, position, s.actuator_serial, m.parameter);
+        std::optional<SeriesStats>& row = series_row(db, group, s.tail_number, position, s.actuator_serial, m.parameter);
         if (!row) {
             SeriesStats r;
             r.tail_number = s.tail_number;
@@ -451,22 +496,24 @@ void set_chain_head(Batch& b, const std::string& tail, std::int64_t session_id, 
 void flush(Database& db, Batch& b) {
     Statement& up = db.cached(std::string("INSERT OR REPLACE INTO series_stats(") + detail::kSeriesStatsColumns +
                               ") VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
-    for (const auto& [key, row] : b.series) {
-        if (!row) continue;
-        const SeriesStats& r = *row;
-        up.reset();
-        up.bind(1, r.tail_number).bind(2, r.position).bind(3, r.actuator_serial).bind(4, r.parameter).bind(5, r.n);
-        up.bind(6, r.first_days).bind(7, r.last_days);
-        int c = 8;
-        for (double v : {r.s_w, r.s_wt, r.s_wtt, r.s_wy, r.s_wty, r.s_wyy}) up.bind(c++, v);
-        up.bind(14, r.n_cycles);
-        bind_optional(up, 15, r.first_cycles);
-        bind_optional(up, 16, r.last_cycles);
-        c = 17;
-        for (double v : {r.c_w, r.c_wt, r.c_wtt, r.c_wy, r.c_wty, r.c_wyy}) up.bind(c++, v);
-        up.bind(23, r.last_session_id).bind(24, r.last_value).bind(25, r.last_std_error).bind(26, r.limit_kind);
-        bind_optional(up, 27, r.limit_value);
-        up.run();
+    for (const auto& [key, group] : b.series) {
+        for (const auto& [parameter, row] : group) {
+            if (!row) continue;
+            const SeriesStats& r = *row;
+            up.reset();
+            up.bind(1, r.tail_number).bind(2, r.position).bind(3, r.actuator_serial).bind(4, r.parameter).bind(5, r.n);
+            up.bind(6, r.first_days).bind(7, r.last_days);
+            int c = 8;
+            for (double v : {r.s_w, r.s_wt, r.s_wtt, r.s_wy, r.s_wty, r.s_wyy}) up.bind(c++, v);
+            up.bind(14, r.n_cycles);
+            bind_optional(up, 15, r.first_cycles);
+            bind_optional(up, 16, r.last_cycles);
+            c = 17;
+            for (double v : {r.c_w, r.c_wt, r.c_wtt, r.c_wy, r.c_wty, r.c_wyy}) up.bind(c++, v);
+            up.bind(23, r.last_session_id).bind(24, r.last_value).bind(25, r.last_std_error).bind(26, r.limit_kind);
+            bind_optional(up, 27, r.limit_value);
+            up.run();
+        }
     }
     Statement& ps = db.cached(
         "INSERT OR REPLACE INTO position_status(tail_number, position, actuator_serial, sessions, last_session_id, last_utc, last_verdict, "
@@ -531,28 +578,39 @@ std::optional<std::string> ata_reference_problem(const std::string& ata) {
 }
 
 std::vector<SessionMeasurement> session_measurements(const std::vector<StoredFinding>& findings) {
-    std::map<std::string, SessionMeasurement> by_parameter;
-    std::map<std::string, double> sum_w, sum_wy;
+    // A session has a handful of parameters: a flat list searched in place (no map nodes per call),
+    // sums in the order of the findings, the result sorted by parameter.
+    struct Acc {
+        SessionMeasurement m;
+        double sum_w = 0, sum_wy = 0;
+    };
+    std::vector<Acc> acc;
+    acc.reserve(findings.size());
     for (const auto& f : findings) {
-        auto& m = by_parameter[f.parameter];
-        m.parameter = f.parameter;
+        auto it = std::find_if(acc.begin(), acc.end(), [&f](const Acc& a) { return a.m.parameter == f.parameter; });
+        if (it == acc.end()) {
+            acc.emplace_back();
+            it = acc.end() - 1;
+            it->m.parameter = f.parameter;
+        }
         if (f.limit_kind != kNoLimit && f.limit_value) {
-            m.limit_kind = f.limit_kind;
-            m.limit_value = f.limit_value;
+            it->m.limit_kind = f.limit_kind;
+            it->m.limit_value = f.limit_value;
         }
         if (f.estimator.rfind(kPhysicsPrefix, 0) != 0 || !f.value) continue;
         if (!f.std_error || !(*f.std_error > 0) || !std::isfinite(*f.std_error)) continue;
         const double w = 1.0 / (*f.std_error * *f.std_error);
-        sum_w[f.parameter] += w;
-        sum_wy[f.parameter] += w * *f.value;
+        it->sum_w += w;
+        it->sum_wy += w * *f.value;
     }
+    std::sort(acc.begin(), acc.end(), [](const Acc& x, const Acc& y) { return x.m.parameter < y.m.parameter; });
     std::vector<SessionMeasurement> out;
-    for (auto& [p, m] : by_parameter) {
-        const double w = sum_w[p];
-        if (!(w > 0)) continue;
-        m.value = sum_wy[p] / w;
-        m.std_error = 1.0 / std::sqrt(w);
-        out.push_back(m);
+    out.reserve(acc.size());
+    for (auto& a : acc) {
+        if (!(a.sum_w > 0)) continue;
+        a.m.value = a.sum_wy / a.sum_w;
+        a.m.std_error = 1.0 / std::sqrt(a.sum_w);
+        out.push_back(std::move(a.m));
     }
     return out;
 }
@@ -655,9 +713,9 @@ namespace {
 SessionReceipt insert_session(Database& db, Batch& b, const StoredTestSession& session) {
     // The session as given, with its three hashes beside it (no copy of the session).
     const StoredTestSession& s = session;
-    const std::string limits_sha256 = sha256_hex(s.limits_json);
+    const std::string& limits_sha256 = limits_sha256_of(b, s.limits_json);
     if (b.tails_known.emplace(s.tail_number, true).second)
-        db.cached("INSERT OR IGNORE INTO aircraft(tail_number) VALUES (?)").bind(1, s.tail_number).run();
+        prepared(db, b.insert_aircraft, "INSERT OR IGNORE INTO aircraft(tail_number) VALUES (?)").bind(1, s.tail_number).run();
     if (s.position) register_position(db, b, s);
     std::optional<StoredTestSession> amended;
     if (s.amends_session_id) {
@@ -678,40 +736,44 @@ SessionReceipt insert_session(Database& db, Batch& b, const StoredTestSession& s
     const std::string prev_sha256 = chain_head(db, b, s.tail_number);
     const std::string content = content_sha256(s, limits_sha256, prev_sha256);
 
-    Statement& ins = db.cached(
+    // The texts are bound without a copy (bind_view): the session, the batch's limits hash and the
+    // two local hashes outlive the statement's run below.
+    Statement& ins = prepared(db, b.insert_session,
         "INSERT INTO test_sessions(tail_number, actuator_serial, phase, started_utc, tool_version, verdict, verdict_note, limits_json, "
         "position, cycles, hours_h, operator_id, technician_name, technician_certificate, work_performed, source, limits_sha256, "
         "amends_session_id, correction_reason, prev_sha256, content_sha256) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
-    ins.bind(1, s.tail_number).bind(2, s.actuator_serial).bind(3, s.phase).bind(4, s.started_utc);
-    ins.bind(5, s.tool_version).bind(6, s.verdict).bind(7, s.verdict_note).bind(8, s.limits_json);
-    bind_optional(ins, 9, s.position);
+    ins.bind_view(1, s.tail_number).bind_view(2, s.actuator_serial).bind_view(3, s.phase).bind_view(4, s.started_utc);
+    ins.bind_view(5, s.tool_version).bind_view(6, s.verdict).bind_view(7, s.verdict_note).bind_view(8, s.limits_json);
+    if (s.position) {
+        ins.bind_view(9, *s.position);
+    } else {
+        ins.bind_null(9);
+    }
     bind_optional(ins, 10, s.cycles);
     bind_optional(ins, 11, s.hours_h);
-    ins.bind(12, s.operator_id).bind(13, s.technician_name).bind(14, s.technician_certificate).bind(15, s.work_performed);
-    ins.bind(16, s.source).bind(17, limits_sha256);
+    ins.bind_view(12, s.operator_id).bind_view(13, s.technician_name).bind_view(14, s.technician_certificate).bind_view(15, s.work_performed);
+    ins.bind_view(16, s.source).bind_view(17, limits_sha256);
     bind_optional(ins, 18, s.amends_session_id);
-    ins.bind(19, s.correction_reason).bind(20, prev_sha256).bind(21, content);
+    ins.bind_view(19, s.correction_reason).bind_view(20, prev_sha256).bind_view(21, content);
     ins.run();
     SessionReceipt receipt;
     receipt.session_id = db.last_insert_id();
     receipt.content_sha256 = content;
 
     for (const auto& run : s.runs) (void)detail::insert_run(db, run, receipt.session_id);
-    Statement& fnd = db.cached(
-        "INSERT INTO findings(session_id, parameter, estimator, value, std_error, limit_value, limit_kind, status, note) "
-        "VALUES (?,?,?,?,?,?,?,?,?)");
     for (const auto& f : s.findings) {
-        fnd.reset();
-        fnd.bind(1, receipt.session_id).bind(2, f.parameter).bind(3, f.estimator);
+        Statement& fnd = prepared(db, b.insert_finding,
+            "INSERT INTO findings(session_id, parameter, estimator, value, std_error, limit_value, limit_kind, status, note) "
+            "VALUES (?,?,?,?,?,?,?,?,?)");
+        fnd.bind(1, receipt.session_id).bind_view(2, f.parameter).bind_view(3, f.estimator);
         bind_optional(fnd, 4, f.value);
         bind_optional(fnd, 5, f.std_error);
         bind_optional(fnd, 6, f.limit_value);
-        fnd.bind(7, f.limit_kind).bind(8, f.status).bind(9, f.note).run();
+        fnd.bind_view(7, f.limit_kind).bind_view(8, f.status).bind_view(9, f.note).run();
     }
-    Statement& art = db.cached("INSERT INTO session_artifacts(session_id, role, name, sha256) VALUES (?,?,?,?)");
     for (const auto& a : s.artifacts) {
-        art.reset();
-        art.bind(1, receipt.session_id).bind(2, a.role).bind(3, a.name).bind(4, a.sha256).run();
+        Statement& art = prepared(db, b.insert_artifact, "INSERT INTO session_artifacts(session_id, role, name, sha256) VALUES (?,?,?,?)");
+        art.bind(1, receipt.session_id).bind_view(2, a.role).bind_view(3, a.name).bind_view(4, a.sha256).run();
     }
     // An installation change: the position shows a serial other than the one installed there so far.
     if (s.position && !s.actuator_serial.empty()) {

@@ -23,19 +23,10 @@ std::string in_cycles(std::string s) {
     return s;
 }
 
-/// What a trend needs of a session (build_series reads the id, the time and the findings): a
-/// light copy, so that the views do not copy every session's record text.
-db::StoredTestSession light(const db::StoredTestSession& s) {
-    db::StoredTestSession l;
-    l.session_id = s.session_id;
-    l.started_utc = s.started_utc;
-    l.findings = s.findings;
-    return l;
-}
-
-/// The sessions of a view on both axes, prepared once for its four parameters.
+/// The sessions of a view on both axes, prepared once for its four parameters (pointers into the
+/// report's lists: no copies).
 struct ViewAxes {
-    std::vector<db::StoredTestSession> sessions, with_cycles;
+    std::vector<const db::StoredTestSession*> sessions, with_cycles;
     std::vector<double> days, cycle_axis;
     double origin_days = 0;
 };
@@ -60,16 +51,13 @@ ParameterHistory analyse(const ViewAxes& v, const std::string& parameter, const 
     return h;
 }
 
+/// The view's trends over `trend_sessions` (which must outlive the call).
 void fill_trends(HistoryView& v, const std::vector<const db::StoredTestSession*>& trend_sessions, const FleetRecordOptions& o) {
-    std::vector<db::StoredTestSession> picked;
+    std::vector<const db::StoredTestSession*> picked;
     picked.reserve(trend_sessions.size());
-    std::vector<std::optional<std::int64_t>> cycles;
-    std::vector<std::string> tails;
     for (const auto* s : trend_sessions) {
         if (o.phase != kPhaseAll && s->phase != o.phase) continue;
-        picked.push_back(light(*s));
-        cycles.push_back(s->cycles);
-        tails.push_back(s->tail_number);
+        picked.push_back(s);
         v.trend_session_ids.push_back(s->session_id);
     }
     if (picked.size() < trend_sessions.size())
@@ -81,12 +69,12 @@ void fill_trends(HistoryView& v, const std::vector<const db::StoredTestSession*>
     // The actuator's cycles: aircraft cycles since the view's first session, summed over the tails it
     // was on (the cycles between a removal and the next installation are not known: none).
     double total = 0;
-    std::optional<std::size_t> prev;
-    for (std::size_t i = 0; i < picked.size(); ++i) {
-        if (!cycles[i]) continue;
-        if (prev && tails[*prev] == tails[i]) total += static_cast<double>(*cycles[i] - *cycles[*prev]);
-        prev = i;
-        axes.with_cycles.push_back(picked[i]);
+    const db::StoredTestSession* prev = nullptr;
+    for (const auto* s : picked) {
+        if (!s->cycles) continue;
+        if (prev != nullptr && prev->tail_number == s->tail_number) total += static_cast<double>(*s->cycles - *prev->cycles);
+        prev = s;
+        axes.with_cycles.push_back(s);
         axes.cycle_axis.push_back(total);
     }
     axes.sessions = std::move(picked);

@@ -28,14 +28,26 @@ std::string days(double v) {
     return os.str();
 }
 
-/// Percentile of sorted values by linear interpolation between order statistics (Hyndman & Fan
-/// type 7); +inf when it touches an infinite value.
-double quantile(const std::vector<double>& sorted, double q) {
-    const double h = q * static_cast<double>(sorted.size() - 1);
+/// Percentile by linear interpolation between order statistics (Hyndman & Fan type 7); +inf when
+/// it touches an infinite value. `v` is partitioned in place from index `from` on (std::nth_element:
+/// the two order statistics it needs, the same values a full sort gives); `from` is the first index
+/// not yet fixed by an earlier, lower quantile.
+double quantile(std::vector<double>& v, double q, std::size_t from = 0) {
+    const double h = q * static_cast<double>(v.size() - 1);
     const auto lo = static_cast<std::size_t>(std::floor(h));
-    const std::size_t hi = std::min(lo + 1, sorted.size() - 1);
-    if (std::isinf(sorted[lo]) || std::isinf(sorted[hi])) return kInf;
-    return sorted[lo] + (h - static_cast<double>(lo)) * (sorted[hi] - sorted[lo]);
+    const std::size_t hi = std::min(lo + 1, v.size() - 1);
+    const auto first = v.begin() + static_cast<std::ptrdiff_t>(std::min(from, lo));
+    std::nth_element(first, v.begin() + static_cast<std::ptrdiff_t>(lo), v.end());
+    // After nth_element every element past lo is >= v[lo]: the next order statistic is their minimum.
+    const double x_lo = v[lo];
+    const double x_hi = hi == lo ? x_lo : *std::min_element(v.begin() + static_cast<std::ptrdiff_t>(hi), v.end());
+    if (std::isinf(x_lo) || std::isinf(x_hi)) return kInf;
+    return x_lo + (h - static_cast<double>(lo)) * (x_hi - x_lo);
+}
+
+/// The index past the lower order statistic quantile(v, q) fixed.
+std::size_t fixed_after(const std::vector<double>& v, double q) {
+    return static_cast<std::size_t>(std::floor(q * static_cast<double>(v.size() - 1))) + 1;
 }
 
 }  // namespace
@@ -137,10 +149,12 @@ RulEstimate estimate_rul(const std::vector<TrendPoint>& points, const Degradatio
             x = *tc - r.t_last_days;
         }
     }
-    std::sort(rul.begin(), rul.end());
     r.draws = options.draws;
     r.interval_computed = true;
-    const double lo = quantile(rul, kRulLowerQuantile), hi = quantile(rul, kRulUpperQuantile);
+    // Two order statistics each, by selection rather than a full sort (same values).
+    static_assert(kRulLowerQuantile < kRulUpperQuantile);
+    const double lo = quantile(rul, kRulLowerQuantile);
+    const double hi = quantile(rul, kRulUpperQuantile, fixed_after(rul, kRulLowerQuantile));
     if (std::isfinite(lo)) r.rul_lower_days = lo;
     if (std::isfinite(hi)) r.rul_upper_days = hi;
     return r;

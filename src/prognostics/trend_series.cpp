@@ -20,18 +20,16 @@ std::string num(double v) {
     return os.str();
 }
 
-}  // namespace
+const db::StoredTestSession& deref(const db::StoredTestSession& s) { return s; }
+const db::StoredTestSession& deref(const db::StoredTestSession* s) { return *s; }
 
-const char* to_string(LimitSide s) { return s == LimitSide::Max ? "max" : "min"; }
-
-bool is_beyond(double value, const TrendLimit& limit) {
-    return limit.side == LimitSide::Max ? value > limit.value : value < limit.value;
-}
-
-std::vector<double> session_days(const std::vector<db::StoredTestSession>& sessions) {
+template <typename Session>
+std::vector<double> days_of(const std::vector<Session>& sessions) {
     std::vector<double> days;
+    days.reserve(sessions.size());
     std::vector<std::string> problems;
-    for (const auto& s : sessions) {
+    for (const auto& entry : sessions) {
+        const db::StoredTestSession& s = deref(entry);
         std::string problem;
         const auto d = parse_utc_days(s.started_utc, problem);
         if (!d) {
@@ -49,15 +47,16 @@ std::vector<double> session_days(const std::vector<db::StoredTestSession>& sessi
     return days;
 }
 
-ParameterSeries build_series(const std::vector<db::StoredTestSession>& sessions, const std::vector<double>& days,
-                             const std::string& parameter, double origin_days) {
+template <typename Session>
+ParameterSeries series_of(const std::vector<Session>& sessions, const std::vector<double>& days, const std::string& parameter,
+                          double origin_days) {
     if (days.size() != sessions.size())
         throw EmadiagError("build_series: " + std::to_string(days.size()) + " times for " + std::to_string(sessions.size()) + " sessions");
     ParameterSeries out;
     out.parameter = parameter;
     std::vector<std::int64_t> skipped;
     for (std::size_t i = 0; i < sessions.size(); ++i) {
-        const auto& s = sessions[i];
+        const db::StoredTestSession& s = deref(sessions[i]);
         double sum_w = 0, sum_wy = 0;
         TrendPoint p;
         std::vector<std::string> unusable;
@@ -103,6 +102,26 @@ ParameterSeries build_series(const std::vector<db::StoredTestSession>& sessions,
                             " (not identifiable or not estimated) left out: " + ids);
     }
     return out;
+}
+
+}  // namespace
+
+const char* to_string(LimitSide s) { return s == LimitSide::Max ? "max" : "min"; }
+
+bool is_beyond(double value, const TrendLimit& limit) {
+    return limit.side == LimitSide::Max ? value > limit.value : value < limit.value;
+}
+
+std::vector<double> session_days(const std::vector<db::StoredTestSession>& sessions) { return days_of(sessions); }
+std::vector<double> session_days(const std::vector<const db::StoredTestSession*>& sessions) { return days_of(sessions); }
+
+ParameterSeries build_series(const std::vector<db::StoredTestSession>& sessions, const std::vector<double>& days, const std::string& parameter,
+                             double origin_days) {
+    return series_of(sessions, days, parameter, origin_days);
+}
+ParameterSeries build_series(const std::vector<const db::StoredTestSession*>& sessions, const std::vector<double>& days,
+                             const std::string& parameter, double origin_days) {
+    return series_of(sessions, days, parameter, origin_days);
 }
 
 }  // namespace emadiag::prognostics

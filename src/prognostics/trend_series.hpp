@@ -46,10 +46,15 @@ struct ParameterSeries {
 /// Days since 1970 of each session's started_utc. Throws EmadiagError listing every session whose
 /// started_utc is not "YYYY-MM-DDThh:mm:ss[.fff][Z]", naming its id and value.
 [[nodiscard]] std::vector<double> session_days(const std::vector<db::StoredTestSession>& sessions);
+/// The same over sessions held elsewhere (the report's views point into one list, no copies).
+[[nodiscard]] std::vector<double> session_days(const std::vector<const db::StoredTestSession*>& sessions);
 
 /// The series of `parameter` over `sessions` (in the order given), t_days relative to origin_days
 /// (days since 1970). `days` is session_days(sessions).
 [[nodiscard]] ParameterSeries build_series(const std::vector<db::StoredTestSession>& sessions, const std::vector<double>& days,
+                                           const std::string& parameter, double origin_days);
+/// The same over sessions held elsewhere (the same series as over copies of them).
+[[nodiscard]] ParameterSeries build_series(const std::vector<const db::StoredTestSession*>& sessions, const std::vector<double>& days,
                                            const std::string& parameter, double origin_days);
 
 }  // namespace emadiag::prognostics

@@ -74,6 +74,19 @@ TEST(Sha256, MatchesTheFips180Examples) {
     }
 }
 
+TEST(Sha256, MatchesAnIndependentImplementationAtEveryLengthUpTo300Bytes) {
+    // Every padding case and 0 to 4 whole blocks, on whichever compression function this CPU uses
+    // (the SHA extensions or the portable one). Expected: Python's hashlib over the same 301 inputs,
+    // bytes (7 i + 3) mod 256, the 301 hex digests concatenated and hashed once more.
+    std::string digests;
+    for (std::size_t n = 0; n <= 300; ++n) {
+        std::string bytes(n, '\0');
+        for (std::size_t i = 0; i < n; ++i) bytes[i] = static_cast<char>((i * 7 + 3) & 0xff);
+        digests += sha256_hex(bytes);
+    }
+    EXPECT_EQ(sha256_hex(digests), "9ab015b3431ba48c0f99e81c5bb7d903f6bfea343d7d7b190120d07cc51e653b");
+}
+
 TEST(Record, StoresEveryFieldOfTheRecordAndReadsItBack) {
     Database db(":memory:");
     const auto receipt = store_session(db, session_at("F-WEMA", "LH-ELEV", "SN-1", "2026-01-05T08:00:00Z", 0.08, 1200));

@@ -28,6 +28,12 @@ public:
     Statement& bind(int index, const std::string& value);
     Statement& bind_blob(int index, std::string_view bytes);
     Statement& bind_null(int index);
+    /// Binds text without copying it (SQLITE_STATIC): `value` must stay valid and unchanged until
+    /// the statement has run and been reset (the bulk store binds the caller's session fields).
+    Statement& bind_view(int index, std::string_view value);
+    /// Column text as a view into SQLite's buffer: valid until the next step(), reset() or column
+    /// call of another type on that column (read it into a string at once, or compare it).
+    [[nodiscard]] std::string_view column_view(int col) const;
     /// Steps once: true while a row is available, false when done. Throws DbError on failure.
     bool step();
     /// Runs a statement that returns no rows.
@@ -45,6 +51,8 @@ private:
     std::string sql_;
 };
 
+/// One SQLite connection. Not for concurrent use: one thread at a time (the connection is opened
+/// without its own mutex, SQLite's multi-thread mode); open one Database per thread.
 class Database {
 public:
     static constexpr int kDefaultBusyTimeoutMs = 5000;
