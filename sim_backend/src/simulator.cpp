@@ -227,15 +227,17 @@ std::vector<SimResult> simulate_batch(const std::vector<SimConfig>& configs, uns
     for (const auto& c : configs) c.params.validate();
     (void)detail::make_shared(configs[0]);  // duration and step counts: throw here, not in a worker
     // One group is the chosen target's lanes x groups simulations (1 on the scalar path). A batch
-    // too small to give every thread full groups (a fit's Jacobian columns: 3 to 6) runs single
-    // vectors instead (groups = 1), spread evenly over the threads.
+    // too small to give every thread full groups (a fit's Jacobian columns: 3 to 8) runs single
+    // vectors instead (groups = 1), each filled before the next is started: a vector with 2 lanes
+    // in use costs about what one with 8 does, so spreading 3 runs over two threads would double
+    // the CPU time for no gain in wall time on a machine whose other core is busy.
     const bool scalar = detail::batch_runs_scalar();
     const detail::BatchShape shape = scalar ? detail::BatchShape{"scalar", 1, 1} : detail::batch_shape();
     const auto lanes = static_cast<std::size_t>(shape.lanes);
     const std::size_t thread_count = std::max(1u, threads);
     const bool small = !scalar && configs.size() < thread_count * lanes * static_cast<std::size_t>(shape.groups);
     const std::size_t width = scalar ? 1
-                              : small ? std::min(lanes, (configs.size() + thread_count - 1) / thread_count)
+                              : small ? lanes
                                       : lanes * static_cast<std::size_t>(shape.groups);
     const std::size_t kernel_width = small ? lanes : width;  // lanes beyond `width` are padding
     const std::size_t groups = (configs.size() + width - 1) / width;

@@ -25,6 +25,7 @@ struct Lanes {
     Effects fx[W];
     const std::vector<Term>* torque_terms[W];
     bool any_torque_terms;
+    bool any_lane_effects;  // some lane has ripple, spall or Stribeck (library calls per step)
     D j, dt_inv_j, viscous;
     // state
     D i, w, th, x[4];
@@ -132,33 +133,36 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     M in_gap = M{};
     if constexpr (kFull) {
         // The effects beyond the datasheet use sin and exp: lane by lane, the same library calls as
-        // the scalar path.
-        double tm_a[W], th_a[W], thl_a[W], w0_a[W], dyn_a[W], stat_a[W];
-        to_array(t_m, tm_a);
-        to_array(z.th, th_a);
-        to_array(th_load, thl_a);
-        to_array(w0, w0_a);
-        // Each lane has its own effect parameters (z.fx); an effect whose amplitude is zero adds
-        // nothing and is skipped (a ripple of amplitude 0 would add +/-0 to T_M; Stribeck's 0 * exp
-        // adds +0), so lanes without effects, such as a batch's padding, cost no library call.
-        for (int l = 0; l < W; ++l) {
-            const Effects& fx = z.fx[l];
-            if (fx.ripple_amplitude_nm != 0.0) tm_a[l] += fx.ripple_amplitude_nm * std::sin(fx.ripple_periods_per_rev * th_a[l]);
-            const double spall = fx.spall_amplitude_nm == 0.0 ? 0.0
-                : fx.spall_amplitude_nm *
-                      std::exp(-0.5 * std::pow((detail::rad2deg(thl_a[l] * s.inv_tau) - fx.spall_center_deg) /
-                                                   fx.spall_width_deg, 2));
-            double stribeck = 0.0;
-            if (fx.stribeck_amplitude_nm != 0.0) {
-                const double wr = w0_a[l] / fx.stribeck_speed_rad_s;
-                stribeck = fx.stribeck_amplitude_nm * std::exp(-wr * wr);
+        // the scalar path. Without ripple, spall and Stribeck in any lane the loop below would leave
+        // T_M as it is and give +0 for both extras: skipped.
+        if (z.any_lane_effects) {
+            double tm_a[W], th_a[W], thl_a[W], w0_a[W], dyn_a[W], stat_a[W];
+            to_array(t_m, tm_a);
+            to_array(z.th, th_a);
+            to_array(th_load, thl_a);
+            to_array(w0, w0_a);
+            // Each lane has its own effect parameters (z.fx); an effect whose amplitude is zero adds
+            // nothing and is skipped (a ripple of amplitude 0 would add +/-0 to T_M; Stribeck's 0 * exp
+            // adds +0), so lanes without effects, such as a batch's padding, cost no library call.
+            for (int l = 0; l < W; ++l) {
+                const Effects& fx = z.fx[l];
+                if (fx.ripple_amplitude_nm != 0.0) tm_a[l] += fx.ripple_amplitude_nm * std::sin(fx.ripple_periods_per_rev * th_a[l]);
+                const double spall = fx.spall_amplitude_nm == 0.0 ? 0.0
+                    : fx.spall_amplitude_nm *
+                          std::exp(-0.5 * std::pow((detail::rad2deg(thl_a[l] * s.inv_tau) - fx.spall_center_deg) /
+                                                       fx.spall_width_deg, 2));
+                double stribeck = 0.0;
+                if (fx.stribeck_amplitude_nm != 0.0) {
+                    const double wr = w0_a[l] / fx.stribeck_speed_rad_s;
+                    stribeck = fx.stribeck_amplitude_nm * std::exp(-wr * wr);
+                }
+                dyn_a[l] = spall + stribeck;
+                stat_a[l] = spall;
             }
-            dyn_a[l] = spall + stribeck;
-            stat_a[l] = spall;
+            t_m = self::from_array<D>(tm_a);
+            extra_dyn = self::from_array<D>(dyn_a);
+            extra_stat = self::from_array<D>(stat_a);
         }
-        t_m = self::from_array<D>(tm_a);
-        extra_dyn = self::from_array<D>(dyn_a);
-        extra_stat = self::from_array<D>(stat_a);
         viscous = z.viscous * w0;
         // Backlash: inside the free play the load and the transmission friction are not felt.
         if (s.fx.backlash_rad > 0.0) in_gap = vabs(z.gap) < 0.5 * s.fx.backlash_rad;
@@ -396,6 +400,7 @@ inline void run_group(const SimConfig* const* configs, SimResult* const* out) {
     for (int g = 0; g < G; ++g) {
         double fdj[W], fsj[W], c_opp[W], c_aid[W], j[W], dt_inv_j[W], viscous[W];
         z[g].any_torque_terms = false;
+        z[g].any_lane_effects = false;
         for (int l = 0; l < W; ++l) {
             const EmaParams& p = configs[g * W + l]->params;
             fdj[l] = p.fdj_nm;
@@ -409,6 +414,8 @@ inline void run_group(const SimConfig* const* configs, SimResult* const* out) {
             z[g].fx[l] = p.effects;
             z[g].torque_terms[l] = detail::has_torque_terms(p.terms) ? &p.terms : nullptr;
             z[g].any_torque_terms = z[g].any_torque_terms || z[g].torque_terms[l] != nullptr;
+            z[g].any_lane_effects = z[g].any_lane_effects || p.effects.ripple_amplitude_nm != 0.0 ||
+                                    p.effects.spall_amplitude_nm != 0.0 || p.effects.stribeck_amplitude_nm != 0.0;
         }
         z[g].j = self::from_array<D>(j);
         z[g].dt_inv_j = self::from_array<D>(dt_inv_j);
