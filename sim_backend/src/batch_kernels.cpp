@@ -97,6 +97,7 @@ namespace self = ::emadiag::sim::HWY_NAMESPACE;
 void RunBatchGroup(const SimConfig* const* configs, SimResult* const* out) {
     self::run_group<kLanes, kGroups>(configs, out);
 }
+void RunBatchVector(const SimConfig* const* configs, SimResult* const* out) { self::run_group<kLanes, 1>(configs, out); }
 void RunScalar(const SimConfig* config, SimResult* out) { self::run_group<1, 1>(&config, &out); }
 detail::BatchShape GetBatchShape() { return {hwy::TargetName(HWY_TARGET), kLanes, kGroups}; }
 
@@ -107,11 +108,15 @@ HWY_AFTER_NAMESPACE();
 namespace emadiag::sim::detail {
 
 HWY_EXPORT(RunBatchGroup);
+HWY_EXPORT(RunBatchVector);
 HWY_EXPORT(GetBatchShape);
 HWY_EXPORT(RunScalar);
 
 void run_batch_group(const SimConfig* const* configs, SimResult* const* out) {
     HWY_DYNAMIC_DISPATCH(RunBatchGroup)(configs, out);
+}
+void run_batch_vector(const SimConfig* const* configs, SimResult* const* out) {
+    HWY_DYNAMIC_DISPATCH(RunBatchVector)(configs, out);
 }
 BatchShape batch_shape() { return HWY_DYNAMIC_DISPATCH(GetBatchShape)(); }
 void run_scalar(const SimConfig& config, SimResult& out) { HWY_DYNAMIC_DISPATCH(RunScalar)(&config, &out); }

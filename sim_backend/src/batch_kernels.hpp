@@ -14,9 +14,12 @@ struct BatchShape {
 };
 [[nodiscard]] BatchShape batch_shape();
 
-/// Runs batch_shape().lanes * groups simulations that differ only in health; configs and out hold
-/// that many pointers (pad with copies). Finishes each run as simulate does.
+/// Runs batch_shape().lanes * groups simulations that may differ in health, effects (not backlash),
+/// inertia and terms (run_group in step_kernel-inl.h); configs and out hold that many pointers (pad
+/// the rest). Finishes each run as simulate does.
 void run_batch_group(const SimConfig* const* configs, SimResult* const* out);
+/// The same with one vector (groups = 1): batch_shape().lanes simulations, for small batches.
+void run_batch_vector(const SimConfig* const* configs, SimResult* const* out);
 
 /// One simulation on the scalar path (W = 1) compiled for the chosen target: the baseline
 /// run_group<1, 1>'s results bit for bit, faster on targets with more registers (batch_kernels.cpp).

@@ -108,7 +108,6 @@ Shared detail::make_shared(const SimConfig& c) {
     s.load_case = c.load_case;
     s.sequence = c.sequence;
     s.fx = p.effects;
-    s.torque_terms = detail::has_torque_terms(p.terms) ? &p.terms : nullptr;
     const double duration = c.duration_s > 0.0 ? c.duration_s : default_duration_s(c.sequence);
     s.steps_per_sample = steps_in(kSamplePeriodS, p.dt_s, "sample period");
     s.steps_per_aircraft = steps_in(kAircraftPeriodS, p.dt_s, "aircraft period");
@@ -149,19 +148,19 @@ namespace {
 std::string batch_mismatch(const SimConfig& a, const SimConfig& b) {
     if (a.load_case != b.load_case) return "load_case";
     if (a.sequence != b.sequence) return "sequence";
-    if (nlohmann::json(a.params.to_json().value("terms", nlohmann::json())) !=
-        nlohmann::json(b.params.to_json().value("terms", nlohmann::json()))) {
-        return "params.terms";
-    }
     const double da = a.duration_s > 0 ? a.duration_s : default_duration_s(a.sequence);
     const double db = b.duration_s > 0 ? b.duration_s : default_duration_s(b.sequence);
     if (da != db) return "duration_s";
     nlohmann::json ja = a.params.to_json();
     nlohmann::json jb = b.params.to_json();
-    for (const char* health : {"fdj_nm", "fsj_nm", "eta_o", "eta_a"}) {
-        ja.erase(health);
-        jb.erase(health);
+    // Per lane: health, terms, and the effects other than backlash (the true inertia among them).
+    for (const char* lane_field : {"fdj_nm", "fsj_nm", "eta_o", "eta_a", "terms"}) {
+        ja.erase(lane_field);
+        jb.erase(lane_field);
     }
+    if (a.params.effects.backlash_rad != b.params.effects.backlash_rad) return "params.effects.backlash";
+    ja.erase("effects");
+    jb.erase("effects");
     for (const auto& [key, value] : ja.items()) {
         if (jb[key] != value) return "params." + key;
     }
@@ -220,45 +219,58 @@ std::vector<SimResult> simulate_batch(const std::vector<SimConfig>& configs, uns
         const std::string field = batch_mismatch(configs[0], configs[i]);
         if (!field.empty()) {
             throw SimError("simulate_batch: config " + std::to_string(i) + " differs from config 0 in " + field +
-                           "; a batch may differ only in FDJ, FSJ, eta_O, eta_A, noise and seed");
+                           "; a batch may differ only in FDJ, FSJ, eta_O, eta_A, the effects other than backlash, the "
+                           "terms, noise and seed");
         }
     }
     configs[0].params.validate();
     for (const auto& c : configs) c.params.validate();
-    // Terms (term_hook.hpp) are evaluated on the scalar path only.
-    if (!configs[0].params.terms.empty()) {
-        for (std::size_t i = 0; i < configs.size(); ++i) results[i] = simulate(configs[i]);
-        return results;
-    }
     (void)detail::make_shared(configs[0]);  // duration and step counts: throw here, not in a worker
-    // One group is the chosen target's lanes x groups simulations (1 on the scalar path).
+    // One group is the chosen target's lanes x groups simulations (1 on the scalar path). A batch
+    // too small to give every thread full groups (a fit's Jacobian columns: 3 to 8) runs single
+    // vectors instead (groups = 1), each filled before the next is started: a vector with 2 lanes
+    // in use costs about what one with 8 does, so spreading 3 runs over two threads would double
+    // the CPU time for no gain in wall time on a machine whose other core is busy.
     const bool scalar = detail::batch_runs_scalar();
-    const std::size_t width = scalar ? 1 : [] {
-        const detail::BatchShape shape = detail::batch_shape();
-        return static_cast<std::size_t>(shape.lanes) * static_cast<std::size_t>(shape.groups);
-    }();
+    const detail::BatchShape shape = scalar ? detail::BatchShape{"scalar", 1, 1} : detail::batch_shape();
+    const auto lanes = static_cast<std::size_t>(shape.lanes);
+    const std::size_t thread_count = std::max(1u, threads);
+    const bool small = !scalar && configs.size() < thread_count * lanes * static_cast<std::size_t>(shape.groups);
+    const std::size_t width = scalar ? 1
+                              : small ? lanes
+                                      : lanes * static_cast<std::size_t>(shape.groups);
+    const std::size_t kernel_width = small ? lanes : width;  // lanes beyond `width` are padding
     const std::size_t groups = (configs.size() + width - 1) / width;
+    // Padding lanes copy config 0 without its effects and terms (backlash stays: it is shared), so
+    // their lane-by-lane work (effects, terms) costs no library call; their results are discarded.
+    SimConfig padding = configs[0];
+    padding.params.terms.clear();
+    const double backlash = padding.params.effects.backlash_rad;
+    padding.params.effects = Effects{};
+    padding.params.effects.backlash_rad = backlash;
     std::atomic<std::size_t> next{0};
     std::exception_ptr failure;
     std::mutex failure_mutex;
     auto work = [&] {
-        std::vector<SimResult> pad(width);
-        std::vector<const SimConfig*> cfg(width);
-        std::vector<SimResult*> out(width);
+        std::vector<SimResult> pad(kernel_width);
+        std::vector<const SimConfig*> cfg(kernel_width);
+        std::vector<SimResult*> out(kernel_width);
         for (std::size_t g = next.fetch_add(1); g < groups; g = next.fetch_add(1)) {
-            for (std::size_t l = 0; l < width; ++l) {
+            for (std::size_t l = 0; l < kernel_width; ++l) {
                 const std::size_t idx = g * width + l;
-                if (idx < configs.size()) {
+                if (l < width && idx < configs.size()) {
                     cfg[l] = &configs[idx];
                     out[l] = &results[idx];
-                } else {  // pad the last group with copies of its first lane, then discard them
-                    cfg[l] = &configs[g * width];
+                } else {  // pad the group, then discard the padding's results
+                    cfg[l] = &padding;
                     pad[l] = SimResult{};
                     out[l] = &pad[l];
                 }
             }
             if (scalar) {
                 detail::run_group<1, 1>(cfg.data(), out.data());
+            } else if (small) {
+                detail::run_batch_vector(cfg.data(), out.data());
             } else {
                 detail::run_batch_group(cfg.data(), out.data());
             }

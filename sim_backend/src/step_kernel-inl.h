@@ -20,6 +20,13 @@ struct Lanes {
     using D = typename Vec<W>::D;
     // health parameters per lane
     D fdj, fsj, c_opp, c_aid;
+    // Per lane, read only by the kFull step: the effects beyond the datasheet (backlash is shared,
+    // Shared::fx), the torque terms (null: none), the plant inertia J and dt / J.
+    Effects fx[W];
+    const std::vector<Term>* torque_terms[W];
+    bool any_torque_terms;
+    bool any_lane_effects;  // some lane has ripple, spall or Stribeck (library calls per step)
+    D j, dt_inv_j, viscous;
     // state
     D i, w, th, x[4];
     D gap;  // backlash: motor angle minus load angle, within +/- backlash/2
@@ -126,35 +133,58 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     M in_gap = M{};
     if constexpr (kFull) {
         // The effects beyond the datasheet use sin and exp: lane by lane, the same library calls as
-        // the scalar path.
-        double tm_a[W], th_a[W], thl_a[W], w0_a[W], dyn_a[W], stat_a[W];
-        to_array(t_m, tm_a);
-        to_array(z.th, th_a);
-        to_array(th_load, thl_a);
-        to_array(w0, w0_a);
-        for (int l = 0; l < W; ++l) {
-            tm_a[l] += s.fx.ripple_amplitude_nm * std::sin(s.fx.ripple_periods_per_rev * th_a[l]);
-            const double spall = s.fx.spall_amplitude_nm == 0.0 ? 0.0
-                : s.fx.spall_amplitude_nm *
-                      std::exp(-0.5 * std::pow((detail::rad2deg(thl_a[l] * s.inv_tau) - s.fx.spall_center_deg) /
-                                                   s.fx.spall_width_deg, 2));
-            const double wr = w0_a[l] / s.fx.stribeck_speed_rad_s;
-            dyn_a[l] = spall + s.fx.stribeck_amplitude_nm * std::exp(-wr * wr);
-            stat_a[l] = spall;
+        // the scalar path. Without ripple, spall and Stribeck in any lane the loop below would leave
+        // T_M as it is and give +0 for both extras: skipped.
+        if (z.any_lane_effects) {
+            double tm_a[W], th_a[W], thl_a[W], w0_a[W], dyn_a[W], stat_a[W];
+            to_array(t_m, tm_a);
+            to_array(z.th, th_a);
+            to_array(th_load, thl_a);
+            to_array(w0, w0_a);
+            // Each lane has its own effect parameters (z.fx); an effect whose amplitude is zero adds
+            // nothing and is skipped (a ripple of amplitude 0 would add +/-0 to T_M; Stribeck's 0 * exp
+            // adds +0), so lanes without effects, such as a batch's padding, cost no library call.
+            for (int l = 0; l < W; ++l) {
+                const Effects& fx = z.fx[l];
+                if (fx.ripple_amplitude_nm != 0.0) tm_a[l] += fx.ripple_amplitude_nm * std::sin(fx.ripple_periods_per_rev * th_a[l]);
+                const double spall = fx.spall_amplitude_nm == 0.0 ? 0.0
+                    : fx.spall_amplitude_nm *
+                          std::exp(-0.5 * std::pow((detail::rad2deg(thl_a[l] * s.inv_tau) - fx.spall_center_deg) /
+                                                       fx.spall_width_deg, 2));
+                double stribeck = 0.0;
+                if (fx.stribeck_amplitude_nm != 0.0) {
+                    const double wr = w0_a[l] / fx.stribeck_speed_rad_s;
+                    stribeck = fx.stribeck_amplitude_nm * std::exp(-wr * wr);
+                }
+                dyn_a[l] = spall + stribeck;
+                stat_a[l] = spall;
+            }
+            t_m = self::from_array<D>(tm_a);
+            extra_dyn = self::from_array<D>(dyn_a);
+            extra_stat = self::from_array<D>(stat_a);
         }
-        t_m = self::from_array<D>(tm_a);
-        extra_dyn = self::from_array<D>(dyn_a);
-        extra_stat = self::from_array<D>(stat_a);
-        viscous = s.fx.viscous_nm_s_rad * w0;
+        viscous = z.viscous * w0;
         // Backlash: inside the free play the load and the transmission friction are not felt.
         if (s.fx.backlash_rad > 0.0) in_gap = vabs(z.gap) < 0.5 * s.fx.backlash_rad;
         f_r = sel(in_gap, zero, f_r);
     }
-    // Terms as data (term_hook.hpp): an extra torque T_x, on the scalar path only.
+    // Terms as data (term_hook.hpp): an extra torque T_x, each lane its own terms, evaluated lane by
+    // lane with the same call as the scalar path.
     D t_x = zero;
-    if constexpr (kFull && std::is_same_v<D, double>) {
-        if (s.torque_terms != nullptr)
-            t_x = detail::torque_terms_at(*s.torque_terms, w0, z.th, th_load * s.inv_tau, f_r, static_cast<double>(n) * dt, i1);
+    if constexpr (kFull) {
+        if (z.any_torque_terms) {
+            double w_a[W], thm_a[W], thu_a[W], fr_a[W], i_a[W], tx_a[W];
+            to_array(w0, w_a);
+            to_array(z.th, thm_a);
+            to_array(th_load * s.inv_tau, thu_a);
+            to_array(f_r, fr_a);
+            to_array(i1, i_a);
+            for (int l = 0; l < W; ++l) {
+                tx_a[l] = z.torque_terms[l] == nullptr ? 0.0
+                    : detail::torque_terms_at(*z.torque_terms[l], w_a[l], thm_a[l], thu_a[l], fr_a[l], static_cast<double>(n) * dt, i_a[l]);
+            }
+            t_x = self::from_array<D>(tx_a);
+        }
     }
     const D t_act = t_m - f_r - t_x;
     const M moving = vnot(w0 == 0.0);
@@ -175,8 +205,14 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     D t_slip = sel(d_pos, dyn, -dyn);  // d * dyn: friction while slipping (or breaking away)
     if constexpr (kFull) t_slip = t_slip + viscous;
     const D t_f = sel(stuck, t_act, t_slip);
-    // w + dt (T_act - T_F) / J while slipping, arranged so T_act enters last (critical path).
-    const D w_free = (w0 - t_slip * s.dt_inv_j) + t_act * s.dt_inv_j;
+    // w + dt (T_act - T_F) / J while slipping, arranged so T_act enters last (critical path). J is
+    // per lane in the kFull step (a true inertia is an effect).
+    D w_free;
+    if constexpr (kFull) {
+        w_free = (w0 - t_slip * z.dt_inv_j) + t_act * z.dt_inv_j;
+    } else {
+        w_free = (w0 - t_slip * s.dt_inv_j) + t_act * s.dt_inv_j;
+    }
     // A moving shaft whose speed would change sign stops instead (max/min with 0 keep it one op deep).
     const M reversal_stop = moving & (w_free * w0 < 0.0);
     // w_new is 0 (stuck, or a moving shaft whose speed would change sign) or w_free. The two forms
@@ -210,7 +246,7 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         z.e_sat = z.e_sat + (s.k_t * i1 - t_m) * w_avg * dt;
         // Kinetic energy removed by zeroing the speed (reversal stop and end stop).
         const D w_unclipped = sel(reversal_stop, w_free, w_before_stop);
-        z.e_stop = z.e_stop + sel(reversal_stop | at_stop, 0.5 * s.j * (w_unclipped * w_unclipped - w1 * w1), zero);
+        z.e_stop = z.e_stop + sel(reversal_stop | at_stop, 0.5 * z.j * (w_unclipped * w_unclipped - w1 * w1), zero);
         z.sum_tf = z.sum_tf + t_f;
         z.sum_tm = z.sum_tm + t_m;
         z.sum_fr = z.sum_fr + f_r;
@@ -328,7 +364,7 @@ inline void run_lanes(const detail::Shared& shared, Lanes<W>* z, SimResult* cons
     if constexpr (kFull) {
         for (int g = 0; g < G; ++g) {
             Lanes<W>& zg = z[g];
-            double e_in[W], e_cu[W], e_fr[W], e_load[W], e_sat[W], e_stop[W], i[W], w[W];
+            double e_in[W], e_cu[W], e_fr[W], e_load[W], e_sat[W], e_stop[W], i[W], w[W], j[W];
             to_array(zg.e_in, e_in);
             to_array(zg.e_cu, e_cu);
             to_array(zg.e_fr, e_fr);
@@ -337,6 +373,7 @@ inline void run_lanes(const detail::Shared& shared, Lanes<W>* z, SimResult* cons
             to_array(zg.e_stop, e_stop);
             to_array(zg.i, i);
             to_array(zg.w, w);
+            to_array(zg.j, j);
             for (int l = 0; l < W; ++l) {
                 EnergyAccount& e = out[g * W + l]->energy;
                 e.electrical_in_j = e_in[l];
@@ -346,28 +383,43 @@ inline void run_lanes(const detail::Shared& shared, Lanes<W>* z, SimResult* cons
                 e.saturation_loss_j = e_sat[l];
                 e.stop_loss_j = e_stop[l];
                 e.stored_start_j = 0.0;
-                e.stored_end_j = 0.5 * s.l * i[l] * i[l] + 0.5 * s.j * w[l] * w[l];
+                e.stored_end_j = 0.5 * s.l * i[l] * i[l] + 0.5 * j[l] * w[l] * w[l];
             }
         }
     }
 }
 
-/// Runs W * G simulations that differ only in health (checked by the caller) on G groups of W lanes,
-/// then finishes each run (truth, sensor effects, noise).
+/// Runs W * G simulations on G groups of W lanes, then finishes each run (truth, sensor effects and
+/// terms, noise). They may differ in health, in the effects other than backlash, in the plant
+/// inertia and in their terms (checked by the caller); everything else is configs[0]'s.
 template <int W, int G>
 inline void run_group(const SimConfig* const* configs, SimResult* const* out) {
     using D = typename Vec<W>::D;
     const detail::Shared s = detail::make_shared(*configs[0]);
     auto z = std::make_unique<Lanes<W>[]>(G);
     for (int g = 0; g < G; ++g) {
-        double fdj[W], fsj[W], c_opp[W], c_aid[W];
+        double fdj[W], fsj[W], c_opp[W], c_aid[W], j[W], dt_inv_j[W], viscous[W];
+        z[g].any_torque_terms = false;
+        z[g].any_lane_effects = false;
         for (int l = 0; l < W; ++l) {
             const EmaParams& p = configs[g * W + l]->params;
             fdj[l] = p.fdj_nm;
             fsj[l] = p.fsj_nm;
             c_opp[l] = 1.0 / p.eta_o - 1.0;  // eq. (3), opposing
             c_aid[l] = 1.0 - p.eta_a;        // eq. (3), aiding
+            // As make_shared computes them for the lane's own parameters.
+            j[l] = p.plant_inertia_kgm2();
+            dt_inv_j[l] = p.dt_s * (1.0 / j[l]);
+            viscous[l] = p.effects.viscous_nm_s_rad;
+            z[g].fx[l] = p.effects;
+            z[g].torque_terms[l] = detail::has_torque_terms(p.terms) ? &p.terms : nullptr;
+            z[g].any_torque_terms = z[g].any_torque_terms || z[g].torque_terms[l] != nullptr;
+            z[g].any_lane_effects = z[g].any_lane_effects || p.effects.ripple_amplitude_nm != 0.0 ||
+                                    p.effects.spall_amplitude_nm != 0.0 || p.effects.stribeck_amplitude_nm != 0.0;
         }
+        z[g].j = self::from_array<D>(j);
+        z[g].dt_inv_j = self::from_array<D>(dt_inv_j);
+        z[g].viscous = self::from_array<D>(viscous);
         z[g].fdj = self::from_array<D>(fdj);
         z[g].fsj = self::from_array<D>(fsj);
         z[g].c_opp = self::from_array<D>(c_opp);

@@ -43,8 +43,7 @@ struct Shared {
     double dt, v_dc, r, l, k_t, i_max, t_max, w_max, inv_j, j, tau, k_theta, k_w, stop_m;
     LoadCase load_case;
     Sequence sequence;
-    Effects fx;
-    const std::vector<Term>* torque_terms;  // term_hook.hpp: scalar path only, null when none
+    Effects fx;  // backlash_rad is the one shared effect; the others are per lane (Lanes::fx)
     long steps_per_sample, steps_per_aircraft, total_samples, brk_first_hold_steps, brk_mid_hold_steps;
 };
 

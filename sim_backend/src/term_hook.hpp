@@ -1,7 +1,7 @@
 #pragma once
 // The simulator's hook for terms as data (terms.hpp): the extra torque of the torque terms at one
-// step of the scalar path, and the sensor terms on the reported samples. The batched SIMD path does
-// not evaluate terms: simulate_batch runs configs with terms on the scalar path.
+// step (the scalar path, and each lane of the batched path with that lane's terms), and the sensor
+// terms on the reported samples.
 #include "emadiag/sim/simulator.hpp"
 #include "emadiag/sim/terms.hpp"
 

@@ -1,5 +1,5 @@
-// emadiag test-run --bus socketcan:can0 --tail N123EM [--phase pre-flight|post-flight] --db FILE:
-// the technician's one command on the ramp (diagnosis/test_run.hpp). It prints progress, the
+// emadiag test-run --bus socketcan:can0 --tail N123EM [--phase pre-flight|post-flight] --db FILE
+// [--model AUGMENTED.json]: the technician's one command on the ramp (diagnosis/test_run.hpp). It prints progress, the
 // findings against the limits and the verdict; the exit code is the verdict.
 #include "cli/command.hpp"
 #include "cli/interrupt.hpp"
@@ -32,6 +32,7 @@ struct TestRunCliOptions {
     std::string db = "maintenance.db";
     std::string out_dir = "test-runs";
     std::string limits;
+    std::string model;
     std::uint16_t session_id = 1;
     int answer_timeout_ms = 500;
     SessionRecordInfo record;
@@ -45,6 +46,10 @@ std::string num(double v, int digits = 4) {
 
 void print_findings(std::ostream& os, const TestRunResult& r, const HealthLimits& limits) {
     os << "\nfindings (95 % intervals; limits: " << limits.source << "):\n";
+    if (r.augmented_model) {
+        os << "  estimated with the augmented model " << r.augmented_model->path << " (sha256 " << r.augmented_model->sha256
+           << ") removed from each run: " << r.augmented_model->correction_text << '\n';
+    }
     for (const auto& f : r.assessment.findings) {
         os << "  " << std::left << std::setw(7) << f.parameter << ' ' << std::setw(12) << f.estimator << ' ';
         std::string value = "-";
@@ -72,6 +77,8 @@ const bool registered = register_command(Command{
         sub.add_option("--out-dir", o->out_dir, "Directory for the raw bus logs and run CSVs")->capture_default_str();
         sub.add_option("--limits", o->limits, "Limits JSON (docs/test-run.md; default: the datasheet's section-8 envelope)")
             ->check(CLI::ExistingFile);
+        sub.add_option("--model", o->model, "Augmented model JSON from `emadiag discover`: each run is estimated with its effects and "
+                                            "terms removed (checked before anything moves; stored with its SHA-256)");
         sub.add_option("--session-id", o->session_id, "First START_SEQUENCE session id")->capture_default_str();
         add_record_options(sub, o->record);
         sub.add_option("--answer-timeout-ms", o->answer_timeout_ms, "Time the EMA has to answer a command")->capture_default_str();
@@ -85,6 +92,7 @@ const bool registered = register_command(Command{
             t.out_dir = o->out_dir;
             t.db_path = o->db;
             if (!o->limits.empty()) t.limits = HealthLimits::load(o->limits);
+            t.augmented_model_path = o->model;
             t.first_session_id = o->session_id;
             t.answer_timeout = std::chrono::milliseconds(o->answer_timeout_ms);
             t.tool_version = EMADIAG_VERSION;

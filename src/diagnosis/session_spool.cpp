@@ -1,5 +1,6 @@
 #include "diagnosis/session_spool.hpp"
 
+#include "diagnosis/augmented_model_use.hpp"
 #include "diagnosis/test_run.hpp"
 
 #include "can_tool/candump_run.hpp"
@@ -16,6 +17,7 @@
 #include <cerrno>
 #include <cstring>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 namespace emadiag {
@@ -67,7 +69,8 @@ nlohmann::json to_json(const SessionManifest& m) {
     for (const auto& l : m.logs) logs.push_back({{"sequence", l.sequence}, {"attempt", l.attempt}, {"log_path", l.log_path}});
     return {{"format", kManifestFormat}, {"tail_number", m.tail_number}, {"phase", m.phase}, {"started_utc", m.started_utc},
             {"tool_version", m.tool_version}, {"limits_json", m.limits_json}, {"sequences", m.sequences},
-            {"logs", logs}, {"state", m.state}, {"record_json", m.record_json}};
+            {"logs", logs}, {"state", m.state}, {"record_json", m.record_json},
+            {"augmented_model_path", m.augmented_model_path}, {"augmented_model_text", m.augmented_model_text}};
 }
 
 std::filesystem::path lock_path_for(const std::filesystem::path& manifest) {
@@ -186,6 +189,12 @@ SessionManifest read_session_manifest(const std::filesystem::path& path) {
     m.limits_json = text("limits_json");
     m.state = text("state");
     m.record_json = j.contains("record_json") && j["record_json"].is_string() ? j["record_json"].get<std::string>() : "{}";
+    // Absent in manifests written before test-run --model existed: no augmented model.
+    auto optional_text = [&](const char* key) {
+        return j.contains(key) && j[key].is_string() ? j[key].get<std::string>() : std::string();
+    };
+    m.augmented_model_path = optional_text("augmented_model_path");
+    m.augmented_model_text = optional_text("augmented_model_text");
     if (!j.contains("sequences") || !j["sequences"].is_array()) throw EmadiagError(path.string() + ": field \"sequences\" missing");
     for (const auto& s : j["sequences"]) {
         if (!s.is_string()) throw EmadiagError(path.string() + ": field \"sequences\" holds a non-string");
@@ -249,6 +258,17 @@ std::vector<RecoveredSession> recover_spooled_sessions(const std::string& db_pat
         }
         std::vector<TestRunRecord> runs;
         std::vector<std::string> unreadable;
+        // test-run --model: the spool's copy of the augmented model (checked when the session started).
+        std::optional<AugmentedModelUse> model;
+        std::string model_error;
+        if (!m.augmented_model_text.empty()) {
+            try {
+                model = augmented_model_from_text(m.augmented_model_path, m.augmented_model_text);
+            } catch (const std::exception& e) {
+                model_error = e.what();
+                say("spool: " + path.filename().string() + ": " + model_error + "; its runs are not estimated");
+            }
+        }
         for (const auto& l : m.logs) {
             TestRunRecord rec;
             rec.sequence = l.sequence;
@@ -280,7 +300,8 @@ std::vector<RecoveredSession> recover_spooled_sessions(const std::string& db_pat
             rec.outcome.status = rec.outcome.run.meta_value("status").value_or("incomplete");
             rec.outcome.valid = rec.outcome.run.meta_value("valid").value_or("false") == "true";
             rec.outcome.invalid_reason = rec.outcome.run.meta_value("invalid_reason").value_or("");
-            if (rec.outcome.valid) session_parts::estimate(rec);
+            if (rec.outcome.valid && !model_error.empty()) rec.estimate_error = model_error;
+            else if (rec.outcome.valid) session_parts::estimate(rec, model ? &*model : nullptr);
             runs.push_back(std::move(rec));
         }
         HealthLimits limits = HealthLimits::datasheet_envelope();

@@ -32,6 +32,10 @@ struct SessionManifest {
     /// The record fields of the session (position, ATA reference, cycles, hours, operator, person,
     /// the position list's hash) as JSON, so a recovered session carries them too.
     std::string record_json = "{}";
+    /// test-run --model: the augmented model's path and its text as read at the start (empty: none),
+    /// so a recovered session is estimated with the same model and lists it with the same SHA-256.
+    std::string augmented_model_path;
+    std::string augmented_model_text;
     std::vector<std::string> sequences;  ///< the routine commanded, in order
     std::vector<SpooledLog> logs;        ///< every log started, in order
     /// "recording" while sequences run; "recorded" once the routine ended and only storing is left.

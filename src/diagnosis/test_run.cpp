@@ -8,6 +8,7 @@
 #include "core/run_csv.hpp"
 #include "core/run_summary.hpp"
 #include "emadiag/db/run_store.hpp"
+#include "emadiag/db/sha256.hpp"
 #include "emadiag/db/test_session_store.hpp"
 #include "emadiag/io/utc_now.hpp"
 
@@ -59,9 +60,9 @@ db::StoredRun to_stored(const TestRunRecord& r, const std::string& tail, const s
 
 namespace session_parts {
 
-void estimate(TestRunRecord& rec) {
+void estimate(TestRunRecord& rec, const AugmentedModelUse* model) {
     try {
-        rec.estimates = estimate_run(rec.outcome.run);
+        rec.estimates = model != nullptr ? estimate_with_augmented_model(rec.outcome.run, *model) : estimate_run(rec.outcome.run);
     } catch (const EmadiagError& e) {
         rec.estimate_error = e.what();
     }
@@ -95,6 +96,9 @@ db::StoredTestSession to_stored_session(const SessionManifest& header, const std
     s.limits_json = header.limits_json;
     s.source = "test-run";
     apply_record_fields(s, header.record_json);
+    if (!header.augmented_model_path.empty()) {
+        s.artifacts.push_back({"model", header.augmented_model_path, db::sha256_hex(header.augmented_model_text)});
+    }
     for (const auto& r : runs) s.runs.push_back(to_stored(r, header.tail_number, header.started_utc));
     set_assessment(s, assessment);
     return s;
@@ -122,6 +126,9 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
     db::check_tail_number(options.tail_number);
     db::StoredTestSession s;
     set_record_info(s, options.record);  // an unknown position, bad cycles or hours: nothing moves
+    // The augmented model: missing, unreadable, not a discovery model, a backlash term: nothing moves.
+    std::optional<AugmentedModelUse> model;
+    if (!options.augmented_model_path.empty()) model = load_augmented_model(options.augmented_model_path);
     // Open (create, migrate) the database before anything moves: a test must never end unstorable.
     std::optional<db::Database> database(std::in_place, options.db_path);
     std::error_code ec;
@@ -129,6 +136,11 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
     if (ec) throw EmadiagError(options.out_dir.string() + ": cannot create the output directory: " + ec.message());
 
     TestRunResult result;
+    result.augmented_model = model;
+    if (model) {
+        say("augmented model " + model->path + " (sha256 " + model->sha256 + "): each run is estimated with it removed: " +
+            model->correction_text);
+    }
     // A session an earlier run could not store (killed mid-run, database locked) goes in first.
     database.reset();
     result.recovered = recover_spooled_sessions(options.db_path, say);
@@ -142,6 +154,10 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
     manifest.tool_version = options.tool_version;
     manifest.limits_json = options.limits.to_json().dump();
     manifest.record_json = record_fields_json(s);
+    if (model) {
+        manifest.augmented_model_path = model->path;
+        manifest.augmented_model_text = model->text;
+    }
     for (const auto seq : options.sequences) manifest.sequences.push_back(sequence_name(seq));
     SessionSpool spool(spool_dir_for(options.db_path), manifest);
 
@@ -227,7 +243,7 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
                 if (sum.tr_plateau_down_nm && sum.tr_plateau_up_nm)
                     line << ", T_R (eq. 7) " << *sum.tr_plateau_down_nm << " N m moving down, " << *sum.tr_plateau_up_nm << " N m moving up";
                 say(line.str());
-                session_parts::estimate(rec);
+                session_parts::estimate(rec, model ? &*model : nullptr);
                 if (!rec.estimate_error.empty()) say("  " + rec.sequence + ": not estimated: " + rec.estimate_error);
             }
             const bool retry = !rec.outcome.valid && rec.outcome.transient_loss && attempt == 1 && options.retry_transient && !interrupt.load();
@@ -266,7 +282,10 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
         done += (done.empty() ? "" : ", ") + r.sequence;
     }
     stored.work_performed = "ground test run over CAN (" + options.phase + "): " + (done.empty() ? std::string("no sequence") : done) +
-                            "; estimates (physics, network) and verdict " + std::string(to_string(result.assessment.verdict));
+                            "; estimates (physics, network)" +
+                            (model ? " on the runs corrected by the augmented model " + model->path + " (sha256 " + model->sha256 + ")"
+                                   : std::string()) +
+                            " and verdict " + std::string(to_string(result.assessment.verdict));
     db::SessionReceipt receipt;
     try {
         receipt = db::store_session(*database, stored);

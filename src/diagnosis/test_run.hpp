@@ -14,6 +14,7 @@
 // An aborted or invalid run ends the session as NO_TEST; its logs are stored all the same.
 // The session is spooled beside the database (diagnosis/session_spool.hpp) until it is stored.
 #include "can_tool/recorder.hpp"
+#include "diagnosis/augmented_model_use.hpp"
 #include "diagnosis/session_spool.hpp"
 #include "diagnosis/health_limits.hpp"
 #include "diagnosis/session_storage.hpp"
@@ -46,6 +47,9 @@ struct TestRunOptions {
     std::filesystem::path out_dir;   ///< raw logs and run CSVs: <tail>_<utc>_<phase>_<sequence>.{log,csv}
     std::string db_path;             ///< the maintenance database (created if missing)
     HealthLimits limits = HealthLimits::datasheet_envelope();
+    /// An augmented model from `emadiag discover` (empty: none). It is read and checked before anything
+    /// moves; each valid run is estimated with its effects and terms removed (augmented_model_use.hpp).
+    std::string augmented_model_path;
     std::uint16_t first_session_id = 1;  ///< START_SEQUENCE session ids: this, this + 1, ...
     std::chrono::milliseconds answer_timeout{500};
     std::string tool_version;
@@ -69,6 +73,7 @@ struct TestRunRecord {
 
 struct TestRunResult {
     std::int64_t db_session_id = 0;
+    std::optional<AugmentedModelUse> augmented_model;  ///< the model the estimates used (--model)
     std::string started_utc;
     std::string actuator_serial;
     std::vector<TestRunRecord> runs;
@@ -86,11 +91,13 @@ struct TestRunResult {
 
 /// The parts of a session's storage shared by the live test run and the spool recovery.
 namespace session_parts {
-/// Estimates a valid run (both methods); an estimation error goes to `estimate_error`.
-void estimate(TestRunRecord& record);
+/// Estimates a valid run (both methods), on the run corrected by `model` when given; an estimation
+/// error goes to `estimate_error`.
+void estimate(TestRunRecord& record, const AugmentedModelUse* model = nullptr);
 /// The verdict from the last attempt of each sequence.
 [[nodiscard]] Assessment assess_records(const std::vector<TestRunRecord>& runs, const HealthLimits& limits);
-/// The stored session: every attempt's run with its raw log read back from `log_path`.
+/// The stored session: every attempt's run with its raw log read back from `log_path`; the
+/// manifest's augmented model (if any) is listed first among the artifacts, with the SHA-256 of its text.
 [[nodiscard]] db::StoredTestSession to_stored_session(const SessionManifest& header, const std::vector<TestRunRecord>& runs,
                                                       const Assessment& assessment);
 }  // namespace session_parts

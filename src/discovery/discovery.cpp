@@ -46,15 +46,31 @@ constexpr double kSensitivityStepMin = 1e-3;
 /// d T_R,model / d parameter per sample, by a forward difference of two re-simulations.
 std::vector<double> sensitivity(const Run& run, const sim::EmaParams& p, const RunSignals& model,
                                 const std::string& name) {
-    const double v = get_parameter(p, name);
-    double h = std::max(kSensitivityStepRel * std::abs(v), kSensitivityStepMin);
-    if (name == "eta_o" && v + h > 1.0) h = -h;
-    sim::EmaParams q = p;
-    set_parameter(q, name, v + h);
-    const RunSignals moved = run_signals(resimulate(run, q));
-    std::vector<double> col(model.size());
-    for (std::size_t k = 0; k < col.size(); ++k) col[k] = (moved.residual_torque_nm[k] - model.residual_torque_nm[k]) / h;
-    return col;
+    return sensitivities(run, p, model, {name}).at(0);
+}
+
+std::vector<std::vector<double>> sensitivities(const Run& run, const sim::EmaParams& p, const RunSignals& model,
+                                               const std::vector<std::string>& names) {
+    std::vector<double> steps;
+    std::vector<sim::EmaParams> moved_params;
+    for (const auto& name : names) {
+        const double v = get_parameter(p, name);
+        double h = std::max(kSensitivityStepRel * std::abs(v), kSensitivityStepMin);
+        if (name == "eta_o" && v + h > 1.0) h = -h;
+        sim::EmaParams q = p;
+        set_parameter(q, name, v + h);
+        steps.push_back(h);
+        moved_params.push_back(q);
+    }
+    const std::vector<Run> moved_runs = resimulate_many(run, moved_params);  // side by side in SIMD lanes
+    std::vector<std::vector<double>> cols;
+    for (std::size_t j = 0; j < names.size(); ++j) {
+        const RunSignals moved = run_signals(moved_runs[j]);
+        std::vector<double> col(model.size());
+        for (std::size_t k = 0; k < col.size(); ++k) col[k] = (moved.residual_torque_nm[k] - model.residual_torque_nm[k]) / steps[j];
+        cols.push_back(std::move(col));
+    }
+    return cols;
 }
 
 namespace {
@@ -562,7 +578,7 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
         in.mask = mask;
         in.residual_nm.resize(s.size());
         for (std::size_t k = 0; k < s.size(); ++k) in.residual_nm[k] = s.residual_torque_nm[k] - model_sim.residual_torque_nm[k];
-        for (const auto& name : health_names) in.base_columns.push_back(sensitivity(run, p, model_sim, name));
+        for (auto& col : sensitivities(run, p, model_sim, health_names)) in.base_columns.push_back(std::move(col));
         for (const auto& a : accepted) {
             in.base_columns.push_back(signature(s, a));
             in.exclude.push_back(a.kind);

@@ -97,6 +97,9 @@ struct DiscoveryReport {
 /// re-simulations of `p` (`model` is the re-simulation of `p`).
 [[nodiscard]] std::vector<double> sensitivity(const Run& run, const sim::EmaParams& p, const RunSignals& model,
                                               const std::string& name);
+/// sensitivity for each of `names`, the re-simulations side by side (resimulate_many).
+[[nodiscard]] std::vector<std::vector<double>> sensitivities(const Run& run, const sim::EmaParams& p, const RunSignals& model,
+                                                             const std::vector<std::string>& names);
 
 /// Throws EmadiagError on a run that cannot be analysed (NaN, too few samples or screening
 /// samples, unknown case/sequence), naming the field, the value and the limit.

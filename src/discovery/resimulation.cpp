@@ -10,8 +10,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <exception>
-#include <mutex>
 #include <thread>
 
 namespace emadiag::discovery {
@@ -63,33 +61,19 @@ const ParamSpec& spec(const std::string& name) {
 
 double rms(double sum_sq, std::size_t n) { return n ? std::sqrt(sum_sq / static_cast<double>(n)) : 0.0; }
 
-/// Calls f(i) for i in [0, n) on up to two threads (the Jacobian's columns are independent
-/// re-simulations; two cores is what a ramp laptop has). Each i writes only its own result, so the
-/// outcome does not depend on the thread count. The first exception is rethrown after the join.
-template <class F>
-void for_each_parallel(std::size_t n, F f) {
-    const unsigned cores = std::max(1u, std::min(2u, std::thread::hardware_concurrency()));
-    if (n < 2 || cores < 2) {
-        for (std::size_t i = 0; i < n; ++i) f(i);
-        return;
+/// Threads for a batch of re-simulations (two cores is what a ramp laptop has).
+unsigned batch_threads() { return std::max(1u, std::min(2u, std::thread::hardware_concurrency())); }
+
+/// The re-simulated run of `c` and its result, checked as resimulate does.
+Run finish_resimulation(const Run& run, const sim::SimConfig& c, const sim::SimResult& r) {
+    if (!r.finite) throw EmadiagError("discovery: the re-simulation diverged (NaN or inf)");
+    Run out = make_run(c, r);
+    out.constants = run.constants;
+    if (out.samples.size() != run.samples.size()) {
+        throw EmadiagError("discovery: the re-simulation has " + std::to_string(out.samples.size()) +
+                           " samples, the run " + std::to_string(run.samples.size()));
     }
-    std::exception_ptr failure;
-    std::mutex failure_mutex;
-    auto run = [&](std::size_t first) {
-        for (std::size_t i = first; i < n; i += 2) {
-            try {
-                f(i);
-            } catch (...) {
-                const std::lock_guard<std::mutex> lock(failure_mutex);
-                if (!failure) failure = std::current_exception();
-                return;
-            }
-        }
-    };
-    std::thread other(run, 1);
-    run(0);
-    other.join();
-    if (failure) std::rethrow_exception(failure);
+    return out;
 }
 
 }  // namespace
@@ -140,14 +124,27 @@ sim::SimConfig resim_config(const Run& run, const sim::EmaParams& params) {
 
 Run resimulate(const Run& run, const sim::EmaParams& params) {
     const sim::SimConfig c = resim_config(run, params);
-    const sim::SimResult r = sim::simulate(c);
-    if (!r.finite) throw EmadiagError("discovery: the re-simulation diverged (NaN or inf)");
-    Run out = make_run(c, r);
-    out.constants = run.constants;
-    if (out.samples.size() != run.samples.size()) {
-        throw EmadiagError("discovery: the re-simulation has " + std::to_string(out.samples.size()) +
-                           " samples, the run " + std::to_string(run.samples.size()));
+    return finish_resimulation(run, c, sim::simulate(c));
+}
+
+std::vector<Run> resimulate_many(const Run& run, const std::vector<sim::EmaParams>& params) {
+    std::vector<Run> out;
+    if (params.empty()) return out;
+    std::vector<sim::SimConfig> configs;
+    configs.reserve(params.size());
+    bool shared_backlash = true;
+    for (const auto& p : params) {
+        configs.push_back(resim_config(run, p));
+        shared_backlash = shared_backlash && p.effects.backlash_rad == params[0].effects.backlash_rad;
     }
+    std::vector<sim::SimResult> results;
+    if (shared_backlash) {
+        results = sim::simulate_batch(configs, batch_threads());
+    } else {
+        for (const auto& c : configs) results.push_back(sim::simulate(c));
+    }
+    out.reserve(params.size());
+    for (std::size_t i = 0; i < configs.size(); ++i) out.push_back(finish_resimulation(run, configs[i], results[i]));
     return out;
 }
 
@@ -222,10 +219,9 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
     }
     const auto m = static_cast<Eigen::Index>(windows.size());
     const auto np = static_cast<Eigen::Index>(names.size());
-    // Thread-safe: the simulation count is added by the callers.
-    auto residual_of = [&](sim::EmaParams p) {
-        p.fsj_nm = std::max(fsj_base_nm, p.fdj_nm);
-        const RunSignals sim_s = run_signals(resimulate(run, p));
+    // The window sums of measured minus model T_R for a re-simulated run.
+    auto residual_of_run = [&](const Run& resimulated) {
+        const RunSignals sim_s = run_signals(resimulated);
         Eigen::VectorXd e(m);
         for (Eigen::Index i = 0; i < m; ++i) {
             double sum = 0;
@@ -236,40 +232,70 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
         }
         return e;
     };
-    auto residual = [&](const sim::EmaParams& p) {
-        ++fr.simulations;
-        return residual_of(p);
+    // One batch of re-simulations (resimulate_many: side by side in SIMD lanes) evaluates a point
+    // q together with the forward-difference steps around it, so that when q is accepted the next
+    // iteration's Jacobian is already there: each LM iteration is one batch, not a batch plus a
+    // trial simulation. The values are those of simulating each point alone, so the fit is the
+    // same, bit for bit, as evaluating the trial first and the Jacobian after it.
+    struct Point {
+        sim::EmaParams params;
+        Eigen::VectorXd e;                     ///< window sums of measured - model T_R at params
+        std::vector<Eigen::VectorXd> stepped;  ///< the same at params + h_j along parameter j
+        std::vector<double> actual;            ///< h_j after clamping to the parameter's range
+    };
+    auto with_fsj = [&](sim::EmaParams q) {
+        q.fsj_nm = std::max(fsj_base_nm, q.fdj_nm);
+        return q;
+    };
+    // Evaluates each of `points` (and `extra`, whose residual goes to *extra_e) with its steps.
+    auto evaluate = [&](std::vector<Point>& points, const sim::EmaParams* extra, Eigen::VectorXd* extra_e) {
+        std::vector<sim::EmaParams> batch;
+        for (auto& pt : points) {
+            batch.push_back(with_fsj(pt.params));
+            pt.actual.assign(static_cast<std::size_t>(np), 0.0);
+            for (Eigen::Index j = 0; j < np; ++j) {
+                const auto ju = static_cast<std::size_t>(j);
+                const std::string& name = names[ju];
+                const ParamSpec& sp = spec(name);
+                const double v = get_parameter(pt.params, name);
+                double h = std::max(sp.step_abs, kStepRel * std::abs(v));
+                if (v + h > sp.hi) h = -h;
+                sim::EmaParams q = pt.params;
+                set_parameter(q, name, v + h);
+                pt.actual[ju] = get_parameter(q, name) - v;
+                batch.push_back(with_fsj(q));
+            }
+        }
+        if (extra != nullptr) batch.push_back(with_fsj(*extra));
+        const std::vector<Run> runs = resimulate_many(run, batch);
+        fr.simulations += static_cast<int>(runs.size());
+        std::size_t k = 0;
+        for (auto& pt : points) {
+            pt.e = residual_of_run(runs[k++]);
+            pt.stepped.clear();
+            for (Eigen::Index j = 0; j < np; ++j) pt.stepped.push_back(residual_of_run(runs[k++]));
+        }
+        if (extra != nullptr) *extra_e = residual_of_run(runs[k]);
     };
     fr.rows = windows.size();
-    if (reference != nullptr) fr.cost_reference = residual(*reference).squaredNorm();
+    std::vector<Point> current(1);
+    current[0].params = start;
+    Eigen::VectorXd e_reference;
+    evaluate(current, reference, &e_reference);
+    if (reference != nullptr) fr.cost_reference = e_reference.squaredNorm();
     sim::EmaParams p = start;
-    Eigen::VectorXd e = residual(p);
+    Eigen::VectorXd e = current[0].e;
     fr.cost_start = e.squaredNorm();
     double cost = fr.cost_start;
     double lambda = kFitStartDamping;
     Eigen::MatrixXd jac(m, np);
+    Point at_p = std::move(current[0]);  // p with its steps
     for (int it = 0; it < max_iterations; ++it) {
         fr.iterations = it + 1;
-        // Forward differences of the model's T_R (e = y - f, so df = -(e_step - e)); the columns'
-        // re-simulations run side by side.
-        std::vector<sim::EmaParams> steps(static_cast<std::size_t>(np), p);
-        std::vector<double> actual(static_cast<std::size_t>(np));
+        // Forward differences of the model's T_R (e = y - f, so df = -(e_step - e)).
         for (Eigen::Index j = 0; j < np; ++j) {
             const auto ju = static_cast<std::size_t>(j);
-            const std::string& name = names[ju];
-            const ParamSpec& s = spec(name);
-            const double v = get_parameter(p, name);
-            double h = std::max(s.step_abs, kStepRel * std::abs(v));
-            if (v + h > s.hi) h = -h;
-            set_parameter(steps[ju], name, v + h);
-            actual[ju] = get_parameter(steps[ju], name) - v;
-        }
-        std::vector<Eigen::VectorXd> stepped(static_cast<std::size_t>(np));
-        for_each_parallel(stepped.size(), [&](std::size_t j) { stepped[j] = residual_of(steps[j]); });
-        fr.simulations += static_cast<int>(np);
-        for (Eigen::Index j = 0; j < np; ++j) {
-            const auto ju = static_cast<std::size_t>(j);
-            jac.col(j) = -(stepped[ju] - e) / actual[ju];
+            jac.col(j) = -(at_p.stepped[ju] - e) / at_p.actual[ju];
         }
         const Eigen::MatrixXd jtj = jac.transpose() * jac;
         const Eigen::VectorXd jte = jac.transpose() * e;
@@ -278,17 +304,19 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
             Eigen::MatrixXd a = jtj;
             a.diagonal() += lambda * jtj.diagonal().cwiseMax(1e-30);
             const Eigen::VectorXd delta = a.ldlt().solve(jte);
-            sim::EmaParams q = p;
+            std::vector<Point> trial(1);
+            trial[0].params = p;
             for (Eigen::Index j = 0; j < np; ++j) {
                 const std::string& name = names[static_cast<std::size_t>(j)];
-                set_parameter(q, name, get_parameter(p, name) + delta(j));
+                set_parameter(trial[0].params, name, get_parameter(p, name) + delta(j));
             }
-            const Eigen::VectorXd eq = residual(q);
-            const double cq = eq.squaredNorm();
+            evaluate(trial, nullptr, nullptr);
+            const double cq = trial[0].e.squaredNorm();
             if (cq < cost) {
                 const double gain = (cost - cq) / cost;
-                p = q;
-                e = eq;
+                p = trial[0].params;
+                e = trial[0].e;
+                at_p = std::move(trial[0]);
                 cost = cq;
                 lambda = std::max(lambda / 10.0, 1e-9);
                 improved = true;

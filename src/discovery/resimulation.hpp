@@ -39,6 +39,10 @@ struct ErrorMetrics {
 [[nodiscard]] sim::SimConfig resim_config(const Run& run, const sim::EmaParams& params);
 /// The re-simulated run (make_run), with the measured run's constants so eq. 7 is the same.
 [[nodiscard]] Run resimulate(const Run& run, const sim::EmaParams& params);
+/// resimulate for each of `params` at once: one sim::simulate_batch on two threads, whose SIMD lanes
+/// each carry their own health, effects and terms (a fit's Jacobian columns), with the same results
+/// bit for bit. Params that differ in backlash, which lanes share, run one at a time.
+[[nodiscard]] std::vector<Run> resimulate_many(const Run& run, const std::vector<sim::EmaParams>& params);
 
 /// Comparison samples are slipping in both runs and away from kinks of either speed (second
 /// difference above this at the sample or a neighbour: the differentiator of eq. 7 fails there,

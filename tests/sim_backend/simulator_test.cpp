@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <iterator>
 #include <map>
 #include <numbers>
 #include <random>
@@ -43,6 +44,51 @@ std::vector<SimConfig> random_health(std::size_t n, std::uint64_t seed, LoadCase
         c.seed = rng();
     }
     return v;
+}
+
+/// Lanes that differ in their effects beyond the datasheet, plant inertia and terms (issue 9 part 4:
+/// a re-simulation fit's Jacobian columns): each config draws its own, some draw none. Backlash is
+/// shared by a batch (`backlash_rad` on every config).
+void random_effects_and_terms(std::vector<SimConfig>& configs, std::uint64_t seed, double backlash_rad) {
+    std::mt19937_64 rng(seed ^ 0x5eedULL);
+    auto u = [&] { return static_cast<double>(rng() >> 11) * (1.0 / 9007199254740992.0); };
+    const char* const torque_terms[] = {"torque: 0.02*sgn(w)*abs(theta_u)", "torque: 3e-8*sgn(w)*sq(w)", "torque: 0.03",
+                                        "torque: 0.05*sin(theta_u, 5)", "torque: 0.06*gauss(theta_u, -4, 1)",
+                                        "torque: 0.01*I", "torque: 0.04*cos(theta_m, 40)", "torque: 0.08*sgn(w)*t",
+                                        "torque: 1e-4*w*abs(F_R)"};
+    const char* const sensor_terms[] = {"current: 0.05", "speed: -0.03*w", "theta: 0.05*t", "hinge: -40*F_R"};
+    for (std::size_t i = 0; i < configs.size(); ++i) {
+        Effects& fx = configs[i].params.effects;
+        fx = Effects{};
+        fx.backlash_rad = backlash_rad;
+        configs[i].params.terms.clear();
+        configs[i].record_truth = i % 3 == 0;
+        if (i % 4 == 3) continue;  // some lanes without any effect or term
+        if (u() < 0.5) fx.viscous_nm_s_rad = 1e-4 * u();
+        if (u() < 0.5) {
+            fx.stribeck_amplitude_nm = 0.1 * u();
+            fx.stribeck_speed_rad_s = 20 + 80 * u();
+        }
+        if (u() < 0.5) {
+            fx.spall_amplitude_nm = 0.1 * u();
+            fx.spall_center_deg = -10 + 12 * u();
+            fx.spall_width_deg = 0.5 + 1.5 * u();
+        }
+        if (u() < 0.5) {
+            fx.ripple_amplitude_nm = 0.08 * u();
+            fx.ripple_periods_per_rev = 1.0 + static_cast<double>(rng() % 12);
+        }
+        if (u() < 0.3) fx.current_gain_error = 0.1 * (u() - 0.5);
+        if (u() < 0.3) fx.hinge_offset_nm = 200 * (u() - 0.5);
+        if (u() < 0.3) fx.true_inertia_kgm2 = configs[i].params.j_kgm2 * (1.0 + 0.3 * u());
+        const std::size_t n_torque = rng() % 3;
+        for (std::size_t k = 0; k < n_torque; ++k) {
+            Term t = parse_term(torque_terms[rng() % std::size(torque_terms)]);
+            t.coefficient *= 0.5 + u();  // each lane its own coefficient
+            configs[i].params.terms.push_back(t);
+        }
+        if (u() < 0.4) configs[i].params.terms.push_back(parse_term(sensor_terms[rng() % std::size(sensor_terms)]));
+    }
 }
 
 ::testing::AssertionResult same_samples(const std::vector<Sample>& a, const std::vector<Sample>& b) {
@@ -85,13 +131,20 @@ TEST(Simulator, BatchedPathMatchesScalarPathBitForBitOnEverySupportedTarget) {
         LoadCase lc;
         Sequence seq;
         bool effects;  // the full step: effects beyond the datasheet (sin, exp per lane), truth
+        bool per_lane = false;  // each lane its own effects, inertia and terms (a fit's Jacobian columns)
+        std::size_t runs = 29;  // more than one full group on every target and a padded last one
     };
     for (const Case& cs : {Case{LoadCase::B, Sequence::Dyn, false}, Case{LoadCase::A, Sequence::Brk, false},
-                           Case{LoadCase::AExt, Sequence::Dyn, false}, Case{LoadCase::B, Sequence::Sweep, true}}) {
-        // 29 runs: more than one full group on every target and a padded last one; half with noise.
-        auto configs = random_health(29, seed, cs.lc, cs.seq);
+                           Case{LoadCase::AExt, Sequence::Dyn, false}, Case{LoadCase::B, Sequence::Sweep, true},
+                           Case{LoadCase::B, Sequence::Dyn, true, true}, Case{LoadCase::A, Sequence::Brk, true, true, 13},
+                           // a small batch (single vectors spread over the threads, padded lanes)
+                           Case{LoadCase::B, Sequence::Dyn, true, true, 5}}) {
+        // Half the runs with noise.
+        auto configs = random_health(cs.runs, seed, cs.lc, cs.seq);
         for (std::size_t i = 0; i < configs.size(); i += 2) configs[i].noise = NoiseProfile::Typical;
-        if (cs.effects) {
+        if (cs.per_lane) {
+            random_effects_and_terms(configs, seed + cs.runs, cs.seq == Sequence::Brk ? 0.0 : 0.002);
+        } else if (cs.effects) {
             for (auto& c : configs) {
                 c.params.effects.viscous_nm_s_rad = 1e-4;
                 c.params.effects.stribeck_amplitude_nm = 0.02;
@@ -107,6 +160,9 @@ TEST(Simulator, BatchedPathMatchesScalarPathBitForBitOnEverySupportedTarget) {
         set_simd_target("scalar");
         std::vector<SimResult> scalar;
         for (const auto& c : configs) scalar.push_back(simulate(c));
+        const std::string what = std::string(" case ") + to_string(cs.lc) + " sequence " + to_string(cs.seq) +
+                                 (cs.per_lane ? " with effects, inertia and terms per lane" : cs.effects ? " with effects" : "") +
+                                 ", " + std::to_string(cs.runs) + " runs";
         for (const std::string& target : targets) {
             set_simd_target(target);
             const SimdTarget used = simd_target();
@@ -115,20 +171,16 @@ TEST(Simulator, BatchedPathMatchesScalarPathBitForBitOnEverySupportedTarget) {
             // simulate() runs the scalar step compiled for this target: the baseline's samples too.
             for (std::size_t i = 0; i < 3; ++i) {
                 const SimResult one = simulate(configs[i]);
-                EXPECT_TRUE(same_samples(one.samples, scalar[i].samples))
-                    << "simulate() on target " << target << " case " << to_string(cs.lc) << " sequence "
-                    << to_string(cs.seq) << (cs.effects ? " with effects" : "") << " run " << i;
-                if (cs.effects) {
+                EXPECT_TRUE(same_samples(one.samples, scalar[i].samples)) << "simulate() on target " << target << what << " run " << i;
+                if (one.energy.friction_work_j != 0.0 || scalar[i].energy.friction_work_j != 0.0) {
                     EXPECT_EQ(one.energy.friction_work_j, scalar[i].energy.friction_work_j) << target;
                 }
             }
             const auto batch = simulate_batch(configs, 2);
             ASSERT_EQ(batch.size(), configs.size());
             for (std::size_t i = 0; i < configs.size(); ++i) {
-                EXPECT_TRUE(same_samples(batch[i].samples, scalar[i].samples))
-                    << "target " << target << " case " << to_string(cs.lc) << " sequence " << to_string(cs.seq)
-                    << (cs.effects ? " with effects" : "") << " run " << i;
-                if (cs.effects) {
+                EXPECT_TRUE(same_samples(batch[i].samples, scalar[i].samples)) << "target " << target << what << " run " << i;
+                if (configs[i].record_truth) {
                     ASSERT_EQ(batch[i].truth.size(), scalar[i].truth.size());
                     for (std::size_t k = 0; k < scalar[i].truth.size(); ++k) {
                         ASSERT_EQ(batch[i].truth[k].friction_torque_nm, scalar[i].truth[k].friction_torque_nm)
@@ -136,6 +188,8 @@ TEST(Simulator, BatchedPathMatchesScalarPathBitForBitOnEverySupportedTarget) {
                     }
                     EXPECT_EQ(batch[i].energy.friction_work_j, scalar[i].energy.friction_work_j) << target;
                     EXPECT_EQ(batch[i].energy.stop_loss_j, scalar[i].energy.stop_loss_j) << target;
+                    EXPECT_EQ(batch[i].energy.load_work_j, scalar[i].energy.load_work_j) << target;
+                    EXPECT_EQ(batch[i].energy.stored_end_j, scalar[i].energy.stored_end_j) << target;
                 }
             }
         }
@@ -185,6 +239,13 @@ TEST(Simulator, BatchRejectsConfigsThatDifferBeyondHealth) {
     v[1] = SimConfig{};
     v[1].params.r_ohm = 2.0;
     EXPECT_THAT([&] { (void)simulate_batch(v); }, ThrowsMessage<SimError>(HasSubstr("params.r_ohm")));
+    v[1] = SimConfig{};
+    v[1].params.effects.backlash_rad = 0.01;  // the one effect lanes share
+    EXPECT_THAT([&] { (void)simulate_batch(v); }, ThrowsMessage<SimError>(HasSubstr("params.effects.backlash")));
+    v[1] = SimConfig{};
+    v[1].params.effects.viscous_nm_s_rad = 1e-4;  // per lane
+    v[1].params.terms.push_back(parse_term("torque: 0.03"));
+    EXPECT_NO_THROW((void)simulate_batch(v));
 }
 
 TEST(Simulator, ABadBatchDurationIsAClearErrorOnTwoThreads) {

@@ -5,6 +5,7 @@
 #include "can_tool/candump_run.hpp"
 #include "can_tool/heartbeat_sender.hpp"
 #include "core/run_csv.hpp"
+#include "emadiag/db/sha256.hpp"
 #include "emadiag/db/test_session_store.hpp"
 #include "emadiag/can/can_error.hpp"
 #include "emadiag/can/ema_icd.hpp"
@@ -507,6 +508,29 @@ TEST_F(Vcan, TechnicianTestRunOnAHealthyEmaIsServiceableAndStored) {
     }
     EXPECT_EQ(s.runs[0].samples.size(), 1000u);
     EXPECT_EQ(s.runs[1].samples.size(), 1600u);
+}
+
+// test-run --model over SocketCAN: the EMA has viscous friction the datasheet lacks; the augmented
+// model from discover carries it, is named with its SHA-256 in the output and stored with the session.
+TEST_F(Vcan, TechnicianTestRunWithAnAugmentedModelNamesAndStoresIt) {
+    auto ema = start_ema({"--case", "A", "--noise", "typical", "--seed", "8", "--effect", "viscous=2e-4"});
+    std::ofstream(path("augmented.json"))
+        << R"({"version": 1, "base": "EMA-REF-1 datasheet", "terms": [{"effect": "viscous_nm_s_rad", "value": 2e-4, "std_error": 1e-6}]})";
+    const std::string sha = db::sha256_file_hex(path("augmented.json"));
+    Process run({EMADIAG_CLI, "test-run", "--bus", bus_spec(), "--tail", "N123EM", "--sequences", "dyn", "--db", path("m.db"),
+                 "--out-dir", path("logs"), "--model", path("augmented.json")},
+                path("test-run.out"));
+    const int rc = run.wait(std::chrono::seconds(60));
+    std::cout << run.out();
+    ASSERT_EQ(rc, 0) << run.out() << run.err() << ema->out();
+    EXPECT_THAT(run.out(), HasSubstr("augmented model " + path("augmented.json") + " (sha256 " + sha + ")"));
+    EXPECT_THAT(run.out(), HasSubstr("removed from each run: torque: 0.0002*w"));
+    EXPECT_EQ(ema->wait(std::chrono::seconds(10)), 0);
+    db::Database database(path("m.db"));
+    const auto s = db::load_test_session(database, db::list_test_sessions(database, "N123EM").at(0).session_id);
+    bool listed = false;
+    for (const auto& a : s.artifacts) listed = listed || (a.role == "model" && a.name == path("augmented.json") && a.sha256 == sha);
+    EXPECT_TRUE(listed);
 }
 
 TEST_F(Vcan, TechnicianTestRunOnAWornEmaIsUnserviceable) {

@@ -13,12 +13,17 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
+#include <cmath>
 #include <filesystem>
+#include <iostream>
 #include <fstream>
 #include <sstream>
 #include <thread>
 
 using namespace emadiag;
+using ::testing::AllOf;
 using ::testing::HasSubstr;
 
 namespace {
@@ -430,4 +435,85 @@ TEST_F(TestRun, ASecondToolOnTheBusIsHeardAndNothingIsCommanded) {
     EXPECT_EQ(ema.stats().sequences_started, 0u);
     db::Database database(o.db_path);
     EXPECT_TRUE(db::list_test_sessions(database, "N123EM").empty());
+}
+
+namespace {
+
+/// An augmented model as `emadiag discover` writes it (the fields apply_model reads), with `terms`.
+std::string write_model(const std::filesystem::path& path, const nlohmann::json& terms) {
+    const nlohmann::json model = {{"version", 1}, {"base", "EMA-REF-1 datasheet"}, {"terms", terms}};
+    std::ofstream(path) << model.dump(2);
+    return path.string();
+}
+
+double physics_fdj(const TestRunResult& r) {
+    if (r.runs.empty() || !r.runs[0].estimates) return NAN;
+    const auto* p = r.runs[0].estimates->estimates.at(0).find(kParamFdj);
+    return p != nullptr && p->value ? *p->value : NAN;
+}
+
+}  // namespace
+
+TEST_F(TestRun, AnAugmentedModelIsRemovedFromTheRunsListedWithItsHashAndNamed) {
+    // The EMA has viscous friction the datasheet model lacks; discover's model carries it.
+    constexpr double kViscousNmSRad = 2e-4;
+    constexpr double kTrueFdjNm = 0.08;
+    const std::string model_path =
+        write_model(dir_ / "augmented.json", {{{"effect", "viscous_nm_s_rad"}, {"value", kViscousNmSRad}, {"std_error", 1e-6}}});
+    can::MemoryBusHub hub;
+    can::MemoryBus tool(hub, "tool");
+    node::EmaNodeConfig c = ema_config(kTrueFdjNm, 0.12, 8);
+    c.sim.params.effects.viscous_nm_s_rad = kViscousNmSRad;
+    test::NodeRunner ema(hub, c);
+    TestRunOptions o = options("N123EM");
+    o.sequences = {can::icd::TestSequence::Dyn};
+    const TestRunResult plain = run_test(tool, o, interrupt_);
+    o.augmented_model_path = model_path;
+    std::vector<std::string> progress;
+    o.on_progress = [&](const std::string& line) { progress.push_back(line); };
+    const TestRunResult with = run_test(tool, o, interrupt_);
+    const double fdj_plain = physics_fdj(plain);
+    const double fdj_with = physics_fdj(with);
+    std::cout << "physics FDJ without the model " << fdj_plain << " N m, with it " << fdj_with << " N m (truth " << kTrueFdjNm << ")\n";
+    EXPECT_LT(std::abs(fdj_with - kTrueFdjNm), 0.25 * std::abs(fdj_plain - kTrueFdjNm)) << "the viscous torque is removed";
+    EXPECT_LT(std::abs(fdj_with - kTrueFdjNm), 0.01);
+    // Which model was used: in the result, the progress, each run's estimates and the stored session.
+    ASSERT_TRUE(with.augmented_model.has_value());
+    const std::string sha = db::sha256_file_hex(model_path);
+    EXPECT_EQ(with.augmented_model->sha256, sha);
+    EXPECT_THAT(progress.at(0), HasSubstr("augmented model " + model_path + " (sha256 " + sha + ")"));
+    EXPECT_THAT(progress.at(0), HasSubstr("0.0002*w"));
+    ASSERT_TRUE(with.runs.at(0).estimates.has_value()) << with.runs[0].estimate_error;
+    EXPECT_EQ(with.runs[0].estimates->model_files.at(0), model_path);
+    EXPECT_THAT(with.runs[0].estimates->notes.at(0), HasSubstr("removed from the run before estimation"));
+    db::Database database(o.db_path);
+    const db::StoredTestSession stored = db::load_test_session(database, with.db_session_id);
+    bool listed = false;
+    for (const auto& a : stored.artifacts) listed = listed || (a.role == "model" && a.name == model_path && a.sha256 == sha);
+    EXPECT_TRUE(listed) << "the augmented model with its SHA-256";
+    EXPECT_THAT(stored.work_performed, HasSubstr("corrected by the augmented model " + model_path));
+    const db::StoredTestSession stored_plain = db::load_test_session(database, plain.db_session_id);
+    for (const auto& a : stored_plain.artifacts) EXPECT_NE(a.name, model_path);
+    EXPECT_TRUE(db::verify_tail(database, "N123EM").ok());
+}
+
+TEST_F(TestRun, ABadAugmentedModelIsRefusedBeforeTheSurfaceMoves) {
+    can::MemoryBusHub hub;
+    can::MemoryBus tool(hub, "tool");
+    test::NodeRunner ema(hub, ema_config(0.08, 0.12, 9));
+    TestRunOptions o = options("N123EM");
+    auto refused = [&](const std::string& path, const std::string& what) {
+        o.augmented_model_path = path;
+        EXPECT_THAT([&] { (void)run_test(tool, o, interrupt_); },
+                    ::testing::ThrowsMessage<EmadiagError>(AllOf(HasSubstr("--model " + path + ": "), HasSubstr(what))));
+    };
+    refused((dir_ / "missing.json").string(), "cannot open the augmented model file");
+    std::ofstream(dir_ / "bad.json") << "{\"version\": 1, \"terms\": [";
+    refused((dir_ / "bad.json").string(), "not valid JSON");
+    std::ofstream(dir_ / "network.json") << R"({"layers": [3, 2]})";
+    refused((dir_ / "network.json").string(), "not an augmented model from `emadiag discover`");
+    refused(write_model(dir_ / "backlash.json", {{{"effect", "backlash_rad"}, {"value", 0.01}, {"std_error", 0}}}), "backlash");
+    refused(write_model(dir_ / "unknown.json", {{{"effect", "warp_drive"}, {"value", 1}, {"std_error", 0}}}), "warp_drive");
+    EXPECT_EQ(ema.stats().sequences_started, 0u);
+    EXPECT_FALSE(std::filesystem::exists(o.db_path)) << "nothing stored, not even an empty database";
 }
