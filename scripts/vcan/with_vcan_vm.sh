@@ -59,6 +59,25 @@ for m in kernel/drivers/net/can/vcan.ko kernel/net/can/can-raw.ko kernel/fs/9p/9
         exit 2
     fi
 done
+# Boot the uncompressed kernel through its PVH entry (CONFIG_PVH, an ELF note QEMU finds): the
+# bzImage's own XZ decompression under TCG took 23 s of a 77 s run on the loaded host, this 2 s.
+# Kept in WORK_DIR for the next run; the bzImage when the extraction fails (python3's lzma).
+BOOT=$KERNEL
+VMLINUX="$WORK/vmlinux-$KVER"
+if [ ! -s "$VMLINUX" ] || [ "$KERNEL" -nt "$VMLINUX" ]; then
+    python3 - "$KERNEL" "$VMLINUX.tmp" <<'PY_EOF' && mv "$VMLINUX.tmp" "$VMLINUX" || rm -f "$VMLINUX.tmp"
+import lzma, sys
+data = open(sys.argv[1], "rb").read()
+at = data.find(b"\xfd7zXZ\x00")
+if at < 0:
+    sys.exit(1)
+out = lzma.LZMADecompressor(format=lzma.FORMAT_XZ).decompress(data[at:])
+if out[:4] != b"\x7fELF" or b"Xen\x00" not in out:
+    sys.exit(1)
+open(sys.argv[2], "wb").write(out)
+PY_EOF
+fi
+[ -s "$VMLINUX" ] && BOOT=$VMLINUX
 rm -rf "$WORK/scratch" "$WORK/command.log" "$WORK/command.status" "$WORK/guest-setup.log" "$WORK/initramfs"
 
 # ---- The initramfs: busybox, the virtio/9p modules in dependency order, and /init. ----
@@ -138,11 +157,11 @@ poweroff -f
 INIT_EOF
 chmod +x "$INIT"
 
-echo "with_vcan_vm: booting a QEMU VM (TCG, kernel $KVER, ${EMADIAG_VM_CPUS:-2} cpu, ${EMADIAG_VM_MEM:-2048M}) to run: $*"
+echo "with_vcan_vm: booting a QEMU VM (TCG, kernel $KVER from ${BOOT##*/}, ${EMADIAG_VM_CPUS:-2} cpu, ${EMADIAG_VM_MEM:-2048M}) to run: $*"
 START=$(date +%s.%N)
 nice -n "${EMADIAG_VM_NICE:-0}" timeout "${EMADIAG_VM_TIMEOUT_S:-1800}" "$QEMU" -nodefaults -no-user-config -display none -no-reboot \
     -machine pc -accel tcg,thread=multi -cpu max -smp "${EMADIAG_VM_CPUS:-2}" -m "${EMADIAG_VM_MEM:-2048M}" \
-    -kernel "$KERNEL" -initrd "$WORK/initramfs.cpio.gz" \
+    -kernel "$BOOT" -initrd "$WORK/initramfs.cpio.gz" \
     -append "console=ttyS0 quiet panic=-1 mitigations=off no_timer_check tsc=reliable ${EMADIAG_VM_APPEND:-}" \
     "${SHARES[@]}" -serial "file:$WORK/vm-console.log" </dev/null >"$WORK/qemu.log" 2>&1
 VM_RC=$?
