@@ -43,6 +43,7 @@ if [ -z "$BUSYBOX" ] || ! "$BUSYBOX" cpio --help >/dev/null 2>&1 || ldd "$BUSYBO
 fi
 KERNEL=${EMADIAG_VM_KERNEL:-}
 if [ -z "$KERNEL" ]; then
+    # shellcheck disable=SC2045  # ls -v: version order, the newest last (the names have no spaces)
     for k in $(ls -v /boot/vmlinuz-* 2>/dev/null); do
         [ -d "/lib/modules/${k#/boot/vmlinuz-}" ] && KERNEL=$k
     done
