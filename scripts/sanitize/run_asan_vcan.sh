@@ -11,7 +11,7 @@
 # prints them and fails if there is any, or if a test fails.
 # Environment: as run_vcan_tests.sh and with_vcan_vm.sh (EMADIAG_VCAN_TIME_SCALE, EMADIAG_VM_*).
 set -uo pipefail
-cd "$(dirname "$0")/../.."
+cd "$(dirname "$0")/../.." || exit 2
 if [ "${EMADIAG_ASAN_VCAN_BUILD:-1}" != 0 ]; then
     scripts/build.sh asan emadiag vcan_session_test || exit 1
 fi
