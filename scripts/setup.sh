@@ -12,6 +12,7 @@ PACKAGES=(
   chromium fonts-dejavu-core python3
   clang libclang-rt-14-dev  # libFuzzer targets (fuzz/, scripts/fuzz/run_fuzz.sh)
   libpq-dev postgresql postgresql-client  # fleet server: libpq for sync/--db postgresql://, a real server in scripts/pg/run_pg_tests.sh
+  qemu-system-x86 linux-image-amd64 busybox-static  # the ASan vcan run in a QEMU VM (scripts/vcan/with_vcan_vm.sh): UML cannot hold ASan's address space
 )
 
 missing=()
@@ -33,5 +34,7 @@ if [ "$(id -u)" -ne 0 ]; then
 fi
 echo "setup: installing ${missing[*]}"
 $SUDO apt-get update -qq
-DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+# INITRD=No: the kernel package's own initramfs is never used (with_vcan_vm.sh builds a busybox one),
+# and generating it took minutes on a loaded machine.
+$SUDO env DEBIAN_FRONTEND=noninteractive INITRD=No apt-get install -y -qq --no-install-recommends "${missing[@]}"
 echo "setup: done"

@@ -7,6 +7,9 @@
 # (same working directory, HOME and TMPDIR on a guest tmpfs in WORK_DIR/scratch) and powers off.
 # The guest's exit status does not come back from linux.uml, so the guest writes COMMAND's output
 # and status into WORK_DIR; this script prints them and exits with COMMAND's status.
+# EMADIAG_VCAN_VM=qemu: boot a full-system QEMU VM instead of user-mode Linux
+# (scripts/vcan/with_vcan_vm.sh: what an AddressSanitizer build needs, which UML's 512 GB address
+# space cannot hold); uml (default) as described here.
 # Environment: EMADIAG_VCAN_TIME_SCALE (telemetry pacing, default 2, what vcan in the guest carries
 #              without loss), EMADIAG_UML_MEM (guest memory, default 512M),
 #              EMADIAG_UML_TIMEOUT_S (default 600), EMADIAG_UML_PRIORITY (the guest's host
@@ -43,6 +46,12 @@ if host_has_vcan; then
     "$@"
     exit $?
 fi
+
+case "${EMADIAG_VCAN_VM:-uml}" in
+    uml) ;;
+    qemu) exec "$(dirname "$0")/with_vcan_vm.sh" "$WORK" "$@" ;;
+    *) echo "$0: EMADIAG_VCAN_VM must be uml or qemu" >&2; exit 2 ;;
+esac
 
 UML=$(command -v linux.uml || true)
 if [ -z "$UML" ]; then
