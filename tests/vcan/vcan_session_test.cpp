@@ -45,6 +45,10 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
+// How long a freshly started ema-sim may take to open the bus and say so. It bounds a process start,
+// not a bus timing: an ASan build in the emulated VM (docs/asan-vcan-vm.md) took over 10 s to start.
+constexpr auto kProcessStartTimeout = std::chrono::seconds(30);
+
 std::string vcan_iface() {
     const char* v = std::getenv("EMADIAG_VCAN_IFACE");
     return v ? v : "vcan0";
@@ -147,7 +151,7 @@ public:
                                       std::to_string(sequences)};
         args.insert(args.end(), extra.begin(), extra.end());
         auto p = std::make_unique<Process>(args, path(name + ".out"));
-        EXPECT_TRUE(p->wait_output("ema-sim on", std::chrono::seconds(10))) << p->err();
+        EXPECT_TRUE(p->wait_output("ema-sim on", kProcessStartTimeout)) << p->err();
         return p;
     }
     std::unique_ptr<Process> start_record(const std::string& seq, const std::string& stem, std::vector<std::string> extra = {}) {
@@ -169,7 +173,7 @@ public:
         std::vector<std::string> args{EMADIAG_CLI, "ema-sim", "--bus", bus_spec(), "--time-scale", time_scale(), "--idle-exit", "3"};
         args.insert(args.end(), extra.begin(), extra.end());
         auto p = std::make_unique<Process>(args, path(name + ".out"));
-        EXPECT_TRUE(p->wait_output("ema-sim on", std::chrono::seconds(10))) << p->err();
+        EXPECT_TRUE(p->wait_output("ema-sim on", kProcessStartTimeout)) << p->err();
         return p;
     }
 
