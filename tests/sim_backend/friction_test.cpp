@@ -25,6 +25,10 @@ struct OneStep {
         z.fsj = c.params.fsj_nm;
         z.c_opp = 1.0 / c.params.eta_o - 1.0;
         z.c_aid = 1.0 - c.params.eta_a;
+        // Per-lane plant state the full step reads (the batch gives each lane its own, s4-disc).
+        z.j = s.j;
+        z.dt_inv_j = s.dt_inv_j;
+        z.viscous = c.params.effects.viscous_nm_s_rad;
     }
     /// Runs step n = 1 (t = 1 us; BRK commands 0 there) and returns the friction torque it applied.
     double run() {
