@@ -88,15 +88,9 @@ poweroff -f
 INIT_EOF
 chmod +x "$INIT"
 echo "with_vcan: host has no $IFACE; booting user-mode Linux ($UML) to run: $*"
-PRIO=()
-case "${EMADIAG_UML_PRIORITY:-rt}" in
-    rt)
-        if chrt -f 10 true 2>/dev/null; then PRIO=(chrt -f 10)
-        elif [ -z "$(nice -n -10 true 2>&1)" ]; then PRIO=(nice -n -10); fi ;;
-    nice) [ -z "$(nice -n -10 true 2>&1)" ] && PRIO=(nice -n -10) ;;
-    normal) ;;
-    *) echo "$0: EMADIAG_UML_PRIORITY must be rt, nice or normal" >&2; exit 2 ;;
-esac
+# shellcheck source=guest_priority.sh
+. "$(dirname "$0")/guest_priority.sh"
+guest_priority "${EMADIAG_UML_PRIORITY:-rt}" || { echo "$0: EMADIAG_UML_PRIORITY must be rt, nice or normal" >&2; exit 2; }
 echo "with_vcan: guest host priority: ${PRIO[*]:-normal}"
 "${PRIO[@]}" timeout "${EMADIAG_UML_TIMEOUT_S:-600}" "$UML" mem="${EMADIAG_UML_MEM:-512M}" root=/dev/root rootfstype=hostfs rootflags=/ rw \
     init="$INIT" con=null con0=fd:0,fd:1 </dev/null >"$WORK/uml-console.log" 2>&1

@@ -162,16 +162,11 @@ chmod +x "$INIT"
 # the guest's 100 ms watchdog and 20 ms heartbeat are real time inside an emulated machine, so a busy
 # host must not take its CPUs away. rt: SCHED_FIFO 10 where permitted, else nice -10. EMADIAG_VM_NICE
 # (a nice value) keeps working for a host that wants the VM below its other work.
-PRIO=()
+# shellcheck source=guest_priority.sh
+. "$(dirname "$0")/guest_priority.sh"
 if [ -n "${EMADIAG_VM_NICE:-}" ]; then PRIO=(nice -n "$EMADIAG_VM_NICE")
 else
-    case "${EMADIAG_VM_PRIORITY:-rt}" in
-        rt) if chrt -f 10 true 2>/dev/null; then PRIO=(chrt -f 10)
-            elif nice -n -10 true 2>/dev/null; then PRIO=(nice -n -10); fi ;;
-        nice) if nice -n -10 true 2>/dev/null; then PRIO=(nice -n -10); fi ;;
-        normal) ;;
-        *) echo "$0: EMADIAG_VM_PRIORITY must be rt, nice or normal" >&2; exit 2 ;;
-    esac
+    guest_priority "${EMADIAG_VM_PRIORITY:-rt}" || { echo "$0: EMADIAG_VM_PRIORITY must be rt, nice or normal" >&2; exit 2; }
 fi
 echo "with_vcan_vm: VM host priority: ${PRIO[*]:-normal}"
 echo "with_vcan_vm: booting a QEMU VM (TCG, kernel $KVER from ${BOOT##*/}, ${EMADIAG_VM_CPUS:-2} cpu, ${EMADIAG_VM_MEM:-2048M}) to run: $*"

@@ -30,6 +30,17 @@ using Result = std::unique_ptr<PGresult, ResultDeleter>;
 
 std::string short_sql(const std::string& sql) { return sql.size() > 80 ? sql.substr(0, 80) + "..." : sql; }
 
+/// One statement with text parameters (nullopt: NULL); a result that is not rows or a command's is an error.
+Result exec_params(PGconn* conn, const std::string& sql, const std::vector<std::optional<std::string>>& params) {
+    std::vector<const char*> values;
+    values.reserve(params.size());
+    for (const auto& p : params) values.push_back(p ? p->c_str() : nullptr);
+    Result res(PQexecParams(conn, sql.c_str(), static_cast<int>(values.size()), nullptr, values.data(), nullptr, nullptr, 0));
+    const auto status = PQresultStatus(res.get());
+    if (status != PGRES_TUPLES_OK && status != PGRES_COMMAND_OK) fail(conn, res.get(), short_sql(sql));
+    return res;
+}
+
 }  // namespace
 
 bool is_fleet_uri(const std::string& text) { return text.rfind("postgresql://", 0) == 0 || text.rfind("postgres://", 0) == 0; }
@@ -72,12 +83,7 @@ PgConnection::~PgConnection() {
 }
 
 std::vector<PgConnection::Row> PgConnection::query(const std::string& sql, const std::vector<std::optional<std::string>>& params) {
-    std::vector<const char*> values;
-    values.reserve(params.size());
-    for (const auto& p : params) values.push_back(p ? p->c_str() : nullptr);
-    Result res(PQexecParams(conn_, sql.c_str(), static_cast<int>(values.size()), nullptr, values.data(), nullptr, nullptr, 0));
-    const auto status = PQresultStatus(res.get());
-    if (status != PGRES_TUPLES_OK && status != PGRES_COMMAND_OK) fail(conn_, res.get(), short_sql(sql));
+    const Result res = exec_params(conn_, sql, params);
     std::vector<Row> rows;
     const int n = PQntuples(res.get()), m = PQnfields(res.get());
     rows.reserve(static_cast<std::size_t>(n));
@@ -103,12 +109,7 @@ std::string_view PgConnection::RowView::text(int column) const {
 
 void PgConnection::each_row(const std::string& sql, const std::vector<std::optional<std::string>>& params,
                             const std::function<void(const RowView&)>& f) {
-    std::vector<const char*> values;
-    values.reserve(params.size());
-    for (const auto& p : params) values.push_back(p ? p->c_str() : nullptr);
-    Result res(PQexecParams(conn_, sql.c_str(), static_cast<int>(values.size()), nullptr, values.data(), nullptr, nullptr, 0));
-    const auto status = PQresultStatus(res.get());
-    if (status != PGRES_TUPLES_OK && status != PGRES_COMMAND_OK) fail(conn_, res.get(), short_sql(sql));
+    const Result res = exec_params(conn_, sql, params);
     const int n = PQntuples(res.get());
     for (int i = 0; i < n; ++i) f(RowView(res.get(), i));
 }
