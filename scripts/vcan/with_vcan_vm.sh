@@ -19,7 +19,7 @@
 #              with_vcan.sh), EMADIAG_VM_MEM (guest memory, default 2048M), EMADIAG_VM_CPUS
 #              (virtual CPUs, default 2, multi-threaded TCG), EMADIAG_VM_TIMEOUT_S (default 1800),
 #              EMADIAG_VM_KERNEL (kernel image, default the newest /boot/vmlinuz-* that has
-#              /lib/modules), EMADIAG_VM_PRIORITY (rt|nice|normal, default rt as for UML), EMADIAG_VM_NICE (a host nice value instead),
+#              /lib/modules), EMADIAG_VM_PRIORITY (rt|nice|normal, default nice), EMADIAG_VM_NICE (a host nice value instead),
 #              and, passed into the guest when set (the rest of the host environment is not):
 #              ASAN_OPTIONS, UBSAN_OPTIONS, LSAN_OPTIONS.
 set -u
@@ -166,7 +166,10 @@ chmod +x "$INIT"
 . "$(dirname "$0")/guest_priority.sh"
 if [ -n "${EMADIAG_VM_NICE:-}" ]; then PRIO=(nice -n "$EMADIAG_VM_NICE")
 else
-    guest_priority "${EMADIAG_VM_PRIORITY:-rt}" || { echo "$0: EMADIAG_VM_PRIORITY must be rt, nice or normal" >&2; exit 2; }
+    # Default nice, not rt: under SCHED_FIFO the two vCPU threads of multi-threaded TCG spin on both
+    # host cores and QEMU's own I/O thread never runs (a run on 2026-11-25 printed not one console line
+    # in 14 minutes).
+    guest_priority "${EMADIAG_VM_PRIORITY:-nice}" || { echo "$0: EMADIAG_VM_PRIORITY must be rt, nice or normal" >&2; exit 2; }
 fi
 echo "with_vcan_vm: VM host priority: ${PRIO[*]:-normal}"
 echo "with_vcan_vm: booting a QEMU VM (TCG, kernel $KVER from ${BOOT##*/}, ${EMADIAG_VM_CPUS:-2} cpu, ${EMADIAG_VM_MEM:-2048M}) to run: $*"
