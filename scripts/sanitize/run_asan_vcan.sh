@@ -22,6 +22,8 @@ rm -rf "$REPORTS" && mkdir -p "$REPORTS" || exit 2
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:log_path=$REPORTS/asan"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1:log_path=$REPORTS/ubsan"
 export EMADIAG_VCAN_VM=${EMADIAG_VCAN_VM:-qemu}
+# The binaries the suite runs, read into the guest's page cache first (with_vcan_vm.sh).
+export EMADIAG_VM_PRELOAD=${EMADIAG_VM_PRELOAD:-"$PWD/build-asan/src/emadiag $PWD/build-asan/tests/vcan/vcan_session_test"}
 start=$(date +%s)
 scripts/vcan/run_vcan_tests.sh build-asan
 status=$?

@@ -242,13 +242,16 @@ TEST_F(Vcan, HeartbeatStopsThenEmaAbortsWithin100ms) {
     const can::EmaIcd icd;
     can::SocketCanBus tool(vcan_iface());
     can::SocketCanBus observer(vcan_iface());  // sees the tool's frames and the EMA's, with kernel timestamps
-    ASSERT_EQ(tool.send(icd.encode_command({can::icd::Command::EnterGroundTest, {}, 0})), can::SendStatus::Sent);
-    ASSERT_EQ(tool.send(icd.encode_command({can::icd::Command::StartSequence, can::icd::TestSequence::Brk, 21})), can::SendStatus::Sent);
-    // 50 Hz heartbeat for 300 ms, then none: the tool's own heartbeat thread (SCHED_FIFO in the
-    // guest), so a loaded host cannot starve it into an early abort.
+    // 50 Hz heartbeat for 300 ms of the sequence, then none: the tool's own heartbeat thread
+    // (SCHED_FIFO in the guest), so a loaded host cannot starve it into an early abort. It starts
+    // before ENTER_GROUND_TEST, as the recorder's does: the watchdog counts from the entry, and a
+    // thread start in a slow guest (an ASan build under QEMU TCG took over 0.8 s) must not fall
+    // inside the first 100 ms.
     {
         can_tool::HeartbeatSender heartbeat(tool);
         heartbeat.start();
+        ASSERT_EQ(tool.send(icd.encode_command({can::icd::Command::EnterGroundTest, {}, 0})), can::SendStatus::Sent);
+        ASSERT_EQ(tool.send(icd.encode_command({can::icd::Command::StartSequence, can::icd::TestSequence::Brk, 21})), can::SendStatus::Sent);
         std::this_thread::sleep_for(std::chrono::milliseconds(300));
         heartbeat.stop();
         ASSERT_FALSE(heartbeat.failure()) << *heartbeat.failure();
@@ -358,7 +361,7 @@ TEST_F(Vcan, CandumpRecordingDecodesToTheSameSamples) {
     ASSERT_FALSE(log_of().empty()) << "candump did not start" << candump.err();
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
     auto rec = start_record("dyn", "session");
-    ASSERT_EQ(rec->wait(std::chrono::seconds(60)), 0) << rec->out() << rec->err();
+    ASSERT_EQ(rec->wait(std::chrono::seconds(60)), 0) << rec->out() << rec->err() << "ema-sim said:\n" << ema->out() << ema->err();
     // candump may be behind on a loaded host: stop it once its log has stopped growing.
     {
         std::uintmax_t last = 0;
