@@ -24,9 +24,24 @@ export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1:log_path=$REPORTS/ubsan
 export EMADIAG_VCAN_VM=${EMADIAG_VCAN_VM:-qemu}
 # The binaries the suite runs, read into the guest's page cache first (with_vcan_vm.sh).
 export EMADIAG_VM_PRELOAD=${EMADIAG_VM_PRELOAD:-"$PWD/build-asan/src/emadiag $PWD/build-asan/tests/vcan/vcan_session_test"}
+# A second attempt for a test that fails: an emulated guest under ASan runs 7 to 9 times slower than
+# the host, and on a loaded host the EMA's real-time 100 ms heartbeat watchdog still trips now and
+# then (gaps of 104 to 172 ms right as a sequence starts, in 2 of 21 tests at load average 10).
+# What this job is for is every test's path run once under ASan + UBSan; the heartbeat timing is
+# the release build's vcan suite's to prove (with two CPU hogs). Every failed attempt is listed at
+# the end, a test that fails twice fails the job, and a sanitizer report from any attempt fails it.
+export EMADIAG_VCAN_CTEST_ARGS=${EMADIAG_VCAN_CTEST_ARGS:-"--repeat until-pass:2"}
+LOG=$PWD/build-asan/asan-vcan.log
 start=$(date +%s)
-scripts/vcan/run_vcan_tests.sh build-asan
-status=$?
+scripts/vcan/run_vcan_tests.sh build-asan 2>&1 | tee "$LOG"
+status=${PIPESTATUS[0]}
+retried=$(grep -E '^ *[0-9/]*Test +#[0-9]+: .*\*\*\*(Failed|Timeout|Exception)' "$LOG" | sed -E 's/^.*Test +#[0-9]+: ([^ ]+) .*$/\1/' | sort | uniq -c)
+if [ -n "$retried" ]; then
+    echo "run_asan_vcan: failed attempts (count, test; a test that then passed was retried once):"
+    echo "$retried"
+else
+    echo "run_asan_vcan: every test passed at its first attempt"
+fi
 found=$(find "$REPORTS" -type f | sort)
 if [ -n "$found" ]; then
     for f in $found; do
