@@ -219,9 +219,8 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
     }
     const auto m = static_cast<Eigen::Index>(windows.size());
     const auto np = static_cast<Eigen::Index>(names.size());
-    // The window sums of measured minus model T_R for a re-simulated run.
-    auto residual_of_run = [&](const Run& resimulated) {
-        const RunSignals sim_s = run_signals(resimulated);
+    // The window sums of measured minus model T_R for a re-simulated run's signals.
+    auto residual_of = [&](const RunSignals& sim_s) {
         Eigen::VectorXd e(m);
         for (Eigen::Index i = 0; i < m; ++i) {
             double sum = 0;
@@ -232,14 +231,17 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
         }
         return e;
     };
-    // One batch of re-simulations (resimulate_many: side by side in SIMD lanes) evaluates a point
-    // q together with the forward-difference steps around it, so that when q is accepted the next
-    // iteration's Jacobian is already there: each LM iteration is one batch, not a batch plus a
-    // trial simulation. The values are those of simulating each point alone, so the fit is the
-    // same, bit for bit, as evaluating the trial first and the Jacobian after it.
+    // One batch of re-simulations (resimulate_many: side by side in SIMD lanes) evaluates a trial
+    // point q together with the forward-difference steps around it, so that when q is accepted the
+    // next iteration's Jacobian is already there. When that trial fails, the further trials of the
+    // iteration (larger damping, each known before any is simulated: they differ only in lambda)
+    // run together in one batch without their steps, and the steps follow for the one accepted.
+    // Every value is that of simulating each point alone (the lanes give the scalar path's results
+    // bit for bit), so the fit is the same, bit for bit, as trying one point after another.
     struct Point {
         sim::EmaParams params;
         Eigen::VectorXd e;                     ///< window sums of measured - model T_R at params
+        RunSignals signals;                    ///< the re-simulation at params
         std::vector<Eigen::VectorXd> stepped;  ///< the same at params + h_j along parameter j
         std::vector<double> actual;            ///< h_j after clamping to the parameter's range
     };
@@ -247,11 +249,14 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
         q.fsj_nm = std::max(fsj_base_nm, q.fdj_nm);
         return q;
     };
-    // Evaluates each of `points` (and `extra`, whose residual goes to *extra_e) with its steps.
-    auto evaluate = [&](std::vector<Point>& points, const sim::EmaParams* extra, Eigen::VectorXd* extra_e) {
+    // Evaluates each of `points` (unless with_point is false: its e and signals are known already),
+    // with its steps when with_steps, and `extra`, whose residual goes to *extra_e.
+    auto evaluate = [&](std::vector<Point>& points, bool with_point, bool with_steps, const sim::EmaParams* extra,
+                        Eigen::VectorXd* extra_e) {
         std::vector<sim::EmaParams> batch;
         for (auto& pt : points) {
-            batch.push_back(with_fsj(pt.params));
+            if (with_point) batch.push_back(with_fsj(pt.params));
+            if (!with_steps) continue;
             pt.actual.assign(static_cast<std::size_t>(np), 0.0);
             for (Eigen::Index j = 0; j < np; ++j) {
                 const auto ju = static_cast<std::size_t>(j);
@@ -271,17 +276,21 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
         fr.simulations += static_cast<int>(runs.size());
         std::size_t k = 0;
         for (auto& pt : points) {
-            pt.e = residual_of_run(runs[k++]);
+            if (with_point) {
+                pt.signals = run_signals(runs[k++]);
+                pt.e = residual_of(pt.signals);
+            }
+            if (!with_steps) continue;
             pt.stepped.clear();
-            for (Eigen::Index j = 0; j < np; ++j) pt.stepped.push_back(residual_of_run(runs[k++]));
+            for (Eigen::Index j = 0; j < np; ++j) pt.stepped.push_back(residual_of(run_signals(runs[k++])));
         }
-        if (extra != nullptr) *extra_e = residual_of_run(runs[k]);
+        if (extra != nullptr) *extra_e = residual_of(run_signals(runs[k]));
     };
     fr.rows = windows.size();
     std::vector<Point> current(1);
     current[0].params = start;
     Eigen::VectorXd e_reference;
-    evaluate(current, reference, &e_reference);
+    evaluate(current, true, true, reference, &e_reference);
     if (reference != nullptr) fr.cost_reference = e_reference.squaredNorm();
     sim::EmaParams p = start;
     Eigen::VectorXd e = current[0].e;
@@ -299,30 +308,51 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
         }
         const Eigen::MatrixXd jtj = jac.transpose() * jac;
         const Eigen::VectorXd jte = jac.transpose() * e;
-        bool improved = false;
-        for (int tries = 0; tries < 4 && !improved; ++tries) {
+        // The trial point at damping lam.
+        auto trial_at = [&](double lam) {
             Eigen::MatrixXd a = jtj;
-            a.diagonal() += lambda * jtj.diagonal().cwiseMax(1e-30);
+            a.diagonal() += lam * jtj.diagonal().cwiseMax(1e-30);
             const Eigen::VectorXd delta = a.ldlt().solve(jte);
-            std::vector<Point> trial(1);
-            trial[0].params = p;
+            Point q;
+            q.params = p;
             for (Eigen::Index j = 0; j < np; ++j) {
                 const std::string& name = names[static_cast<std::size_t>(j)];
-                set_parameter(trial[0].params, name, get_parameter(p, name) + delta(j));
+                set_parameter(q.params, name, get_parameter(p, name) + delta(j));
             }
-            evaluate(trial, nullptr, nullptr);
-            const double cq = trial[0].e.squaredNorm();
-            if (cq < cost) {
-                const double gain = (cost - cq) / cost;
-                p = trial[0].params;
-                e = trial[0].e;
-                at_p = std::move(trial[0]);
-                cost = cq;
-                lambda = std::max(lambda / 10.0, 1e-9);
-                improved = true;
-                if (gain < kFitRelativeTolerance) it = max_iterations;  // converged
-            } else {
+            return q;
+        };
+        bool improved = false;
+        auto accept = [&](Point& q) {
+            const double cq = q.e.squaredNorm();
+            const double gain = (cost - cq) / cost;
+            p = q.params;
+            e = q.e;
+            at_p = std::move(q);
+            cost = cq;
+            lambda = std::max(lambda / 10.0, 1e-9);
+            improved = true;
+            if (gain < kFitRelativeTolerance) it = max_iterations;  // converged
+        };
+        std::vector<Point> trial(1, trial_at(lambda));
+        evaluate(trial, true, true, nullptr, nullptr);
+        if (trial[0].e.squaredNorm() < cost) {
+            accept(trial[0]);
+        } else {
+            lambda *= 10.0;
+            std::vector<double> lambdas;
+            std::vector<Point> more;
+            for (int tries = 1; tries < kFitTriesPerIteration; ++tries) {
+                lambdas.push_back(lambda);
+                more.push_back(trial_at(lambda));
                 lambda *= 10.0;
+            }
+            evaluate(more, true, false, nullptr, nullptr);
+            for (std::size_t i = 0; i < more.size() && !improved; ++i) {
+                if (!(more[i].e.squaredNorm() < cost)) continue;
+                lambda = lambdas[i];
+                std::vector<Point> accepted(1, std::move(more[i]));
+                evaluate(accepted, false, true, nullptr, nullptr);
+                accept(accepted[0]);
             }
         }
         if (!improved) break;
@@ -330,6 +360,7 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
     fr.params = p;
     fr.params.fsj_nm = std::max(fsj_base_nm, p.fdj_nm);
     fr.cost_end = cost;
+    fr.signals = std::move(at_p.signals);
     // Standard errors from the last Jacobian: cov = s^2 (J^T J)^-1, s^2 = cost / (m - p).
     const Eigen::MatrixXd jtj = jac.transpose() * jac;
     const double s2 = cost / std::max<double>(1.0, static_cast<double>(m - np));
