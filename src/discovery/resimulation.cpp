@@ -233,10 +233,10 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
     };
     // One batch of re-simulations (resimulate_many: side by side in SIMD lanes) evaluates a trial
     // point q together with the forward-difference steps around it, so that when q is accepted the
-    // next iteration's Jacobian is already there. When that trial fails, the further trials of the
-    // iteration (larger damping, each known before any is simulated: they differ only in lambda)
-    // run together in one batch without their steps, and the steps follow for the one accepted.
-    // Every value is that of simulating each point alone (the lanes give the scalar path's results
+    // next iteration's Jacobian is already there. The further trials of the iteration (larger
+    // damping, each known before any is simulated: they differ only in lambda) run without their
+    // steps, in the free lanes of that batch or together in the next, and the steps follow for the
+    // one accepted. Every value is that of simulating each point alone (the lanes give the scalar path's results
     // bit for bit), so the fit is the same, bit for bit, as trying one point after another.
     struct Point {
         sim::EmaParams params;
@@ -244,19 +244,20 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
         RunSignals signals;                    ///< the re-simulation at params
         std::vector<Eigen::VectorXd> stepped;  ///< the same at params + h_j along parameter j
         std::vector<double> actual;            ///< h_j after clamping to the parameter's range
+        bool with_point = true;                ///< evaluate: simulate params (false: e, signals known)
+        bool with_steps = true;                ///< evaluate: simulate the steps
     };
     auto with_fsj = [&](sim::EmaParams q) {
         q.fsj_nm = std::max(fsj_base_nm, q.fdj_nm);
         return q;
     };
-    // Evaluates each of `points` (unless with_point is false: its e and signals are known already),
-    // with its steps when with_steps, and `extra`, whose residual goes to *extra_e.
-    auto evaluate = [&](std::vector<Point>& points, bool with_point, bool with_steps, const sim::EmaParams* extra,
-                        Eigen::VectorXd* extra_e) {
+    // Evaluates each of `points` (unless its with_point is false: its e and signals are known
+    // already), with its steps when its with_steps, and `extra`, whose residual goes to *extra_e.
+    auto evaluate = [&](std::vector<Point>& points, const sim::EmaParams* extra, Eigen::VectorXd* extra_e) {
         std::vector<sim::EmaParams> batch;
         for (auto& pt : points) {
-            if (with_point) batch.push_back(with_fsj(pt.params));
-            if (!with_steps) continue;
+            if (pt.with_point) batch.push_back(with_fsj(pt.params));
+            if (!pt.with_steps) continue;
             pt.actual.assign(static_cast<std::size_t>(np), 0.0);
             for (Eigen::Index j = 0; j < np; ++j) {
                 const auto ju = static_cast<std::size_t>(j);
@@ -276,11 +277,11 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
         fr.simulations += static_cast<int>(runs.size());
         std::size_t k = 0;
         for (auto& pt : points) {
-            if (with_point) {
+            if (pt.with_point) {
                 pt.signals = run_signals(runs[k++]);
                 pt.e = residual_of(pt.signals);
             }
-            if (!with_steps) continue;
+            if (!pt.with_steps) continue;
             pt.stepped.clear();
             for (Eigen::Index j = 0; j < np; ++j) pt.stepped.push_back(residual_of(run_signals(runs[k++])));
         }
@@ -290,7 +291,7 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
     std::vector<Point> current(1);
     current[0].params = start;
     Eigen::VectorXd e_reference;
-    evaluate(current, true, true, reference, &e_reference);
+    evaluate(current, reference, &e_reference);
     if (reference != nullptr) fr.cost_reference = e_reference.squaredNorm();
     sim::EmaParams p = start;
     Eigen::VectorXd e = current[0].e;
@@ -333,27 +334,41 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
             improved = true;
             if (gain < kFitRelativeTolerance) it = max_iterations;  // converged
         };
-        std::vector<Point> trial(1, trial_at(lambda));
-        evaluate(trial, true, true, nullptr, nullptr);
-        if (trial[0].e.squaredNorm() < cost) {
-            accept(trial[0]);
-        } else {
-            lambda *= 10.0;
-            std::vector<double> lambdas;
-            std::vector<Point> more;
-            for (int tries = 1; tries < kFitTriesPerIteration; ++tries) {
-                lambdas.push_back(lambda);
-                more.push_back(trial_at(lambda));
-                lambda *= 10.0;
+        // The trials at lambda, 10 lambda, ... in order; the first that lowers the cost is taken. The
+        // first goes with its steps; further ones share its batch while they fill the last vector's
+        // free lanes (no more vector passes), the rest follow in one batch if the first ones fail.
+        std::vector<double> lambdas;
+        std::vector<Point> trials;
+        for (int tries = 0; tries < kFitTriesPerIteration; ++tries) {
+            lambdas.push_back(lambda);
+            trials.push_back(trial_at(lambda));
+            trials.back().with_steps = tries == 0;
+            lambda *= 10.0;  // the damping after this trial fails
+        }
+        const auto first_lanes = static_cast<std::size_t>(1 + np);
+        const std::size_t vector_lanes = std::max(1, sim::simd_target().lanes);
+        const std::size_t free_lanes = (vector_lanes - first_lanes % vector_lanes) % vector_lanes;
+        const std::size_t first_batch = std::min(trials.size(), 1 + free_lanes);
+        std::size_t evaluated = 0;
+        while (!improved && evaluated < trials.size()) {
+            const std::size_t count = evaluated == 0 ? first_batch : trials.size() - evaluated;
+            std::vector<Point> batch(std::make_move_iterator(trials.begin() + static_cast<std::ptrdiff_t>(evaluated)),
+                                     std::make_move_iterator(trials.begin() + static_cast<std::ptrdiff_t>(evaluated + count)));
+            evaluate(batch, nullptr, nullptr);
+            for (std::size_t i = 0; i < batch.size() && !improved; ++i) {
+                if (!(batch[i].e.squaredNorm() < cost)) continue;
+                lambda = lambdas[evaluated + i];
+                if (!batch[i].with_steps) {
+                    batch[i].with_point = false;
+                    batch[i].with_steps = true;
+                    std::vector<Point> accepted(1, std::move(batch[i]));
+                    evaluate(accepted, nullptr, nullptr);
+                    accept(accepted[0]);
+                } else {
+                    accept(batch[i]);
+                }
             }
-            evaluate(more, true, false, nullptr, nullptr);
-            for (std::size_t i = 0; i < more.size() && !improved; ++i) {
-                if (!(more[i].e.squaredNorm() < cost)) continue;
-                lambda = lambdas[i];
-                std::vector<Point> accepted(1, std::move(more[i]));
-                evaluate(accepted, false, true, nullptr, nullptr);
-                accept(accepted[0]);
-            }
+            evaluated += count;
         }
         if (!improved) break;
     }
