@@ -168,8 +168,8 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         if (s.fx.backlash_rad > 0.0) in_gap = vabs(z.gap) < 0.5 * s.fx.backlash_rad;
         f_r = sel(in_gap, zero, f_r);
     }
-    // Terms as data (term_hook.hpp): an extra torque T_x, each lane its own terms, evaluated lane by
-    // lane with the same call as the scalar path.
+    // Terms as data (term_hook.hpp): an extra torque T_x, each lane its own terms, evaluated for all
+    // lanes in one call that gives each lane the scalar path's value bit for bit.
     D t_x = zero;
     if constexpr (kFull) {
         if (z.any_torque_terms) {
@@ -179,10 +179,7 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
             to_array(th_load * s.inv_tau, thu_a);
             to_array(f_r, fr_a);
             to_array(i1, i_a);
-            for (int l = 0; l < W; ++l) {
-                tx_a[l] = z.torque_terms[l] == nullptr ? 0.0
-                    : detail::torque_terms_at(*z.torque_terms[l], w_a[l], thm_a[l], thu_a[l], fr_a[l], static_cast<double>(n) * dt, i_a[l]);
-            }
+            detail::torque_terms_lanes(W, z.torque_terms, w_a, thm_a, thu_a, fr_a, static_cast<double>(n) * dt, i_a, tx_a);
             t_x = self::from_array<D>(tx_a);
         }
     }

@@ -15,6 +15,11 @@ namespace emadiag::sim::detail {
 /// angle theta_u_rad (load side, radians: converted to degrees here), load torque f_r, time t, current i.
 [[nodiscard]] double torque_terms_at(const std::vector<Term>& terms, double w, double theta_m, double theta_u_rad,
                                      double f_r, double t, double i);
+/// torque_terms_at for `lanes` lanes at once (terms[l] null: no terms, 0), with the same result per
+/// lane bit for bit: the periodic factors of all lanes are gathered and their sin/cos evaluated side
+/// by side (term_eval.hpp), then each lane's sum is formed as sum_terms forms it.
+void torque_terms_lanes(int lanes, const std::vector<Term>* const* terms, const double* w, const double* theta_m,
+                        const double* theta_u_rad, const double* f_r, double t, const double* i, double* out);
 /// Adds the current/speed/theta/hinge terms to the samples, each evaluated on the true sample.
 void apply_sensor_terms(std::vector<Sample>& samples, const std::vector<Term>& terms, double tau);
 

@@ -1,6 +1,7 @@
 #include "emadiag/sim/terms.hpp"
 
 #include "emadiag/sim/sim_error.hpp"
+#include "term_eval.hpp"
 
 #include <cctype>
 #include <cmath>
@@ -42,35 +43,6 @@ std::string num(double v) {
     os.precision(8);
     os << v;
     return os.str();
-}
-
-double signal_value(TermSignal s, const TermInputs& x) {
-    switch (s) {
-        case TermSignal::Speed: return x.w;
-        case TermSignal::ThetaMotor: return x.theta_m;
-        case TermSignal::ThetaSurface: return x.theta_u_deg;
-        case TermSignal::LoadTorque: return x.f_r;
-        case TermSignal::Time: return x.t;
-        case TermSignal::Current: return x.i;
-    }
-    return 0.0;
-}
-
-double factor_value(const TermFactor& f, double v) {
-    switch (f.basis) {
-        case TermBasis::Identity: return v;
-        case TermBasis::Abs: return std::fabs(v);
-        case TermBasis::Sgn: return static_cast<double>((v > 0) - (v < 0));
-        case TermBasis::Square: return v * v;
-        case TermBasis::Sin: return std::sin(2.0 * std::numbers::pi * v / f.a);
-        case TermBasis::Cos: return std::cos(2.0 * std::numbers::pi * v / f.a);
-        case TermBasis::Gauss: {
-            const double z = (v - f.a) / f.b;
-            return std::exp(-0.5 * z * z);
-        }
-        case TermBasis::Step: return v >= f.a ? 1.0 : 0.0;
-    }
-    return 0.0;
 }
 
 std::string factor_text(const TermFactor& f) {
@@ -246,7 +218,7 @@ std::string Term::text() const {
 
 double term_basis(const Term& term, const TermInputs& x) {
     double v = 1.0;
-    for (const auto& f : term.factors) v *= factor_value(f, signal_value(f.signal, x));
+    for (const auto& f : term.factors) v *= detail::factor_value(f, detail::signal_value(f.signal, x));
     return v;
 }
 

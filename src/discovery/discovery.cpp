@@ -518,7 +518,6 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
     RunSignals model_sim = base_sim;
     TrajectoryError traj_now = trajectory_error(s, base_sim, floor);
     rep.trajectory_before = traj_now;
-    auto simulate_signals = [&](const sim::EmaParams& q) { return run_signals(resimulate(run, q)); };
     auto peak_of = [&](const std::vector<sim::Term>& terms) {
         std::vector<double> sum(s.size(), 0.0);
         for (const auto& t : terms) {
@@ -663,7 +662,7 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
         step.simulations = fit.simulations;
         step.fit_delta_bic = fit_bic;
         p_new = fit.params;
-        RunSignals new_sim = simulate_signals(p_new);
+        RunSignals new_sim = fit.signals;  // the fit's re-simulation at p_new
         TrajectoryError traj_new = trajectory_error(s, new_sim, floor);
         // The fit must confirm the screening with the same criterion on the re-simulated cost (the
         // model without the effect against the fitted model) and a peak torque of at least
@@ -707,7 +706,7 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
                 AltFit af;
                 try {
                     af.fit = fit_terms(p_prev, {alt.term}, kHypothesisFitIterations);
-                    af.sim = simulate_signals(af.fit.params);
+                    af.sim = af.fit.signals;
                 } catch (const std::exception& e) {  // the alternative cannot be simulated: it is not a hypothesis
                     rep.notes.push_back("hypothesis " + alt.key + " (" + alt.term.text() + ") dropped: " + e.what());
                     continue;

@@ -219,9 +219,8 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
     }
     const auto m = static_cast<Eigen::Index>(windows.size());
     const auto np = static_cast<Eigen::Index>(names.size());
-    // The window sums of measured minus model T_R for a re-simulated run.
-    auto residual_of_run = [&](const Run& resimulated) {
-        const RunSignals sim_s = run_signals(resimulated);
+    // The window sums of measured minus model T_R for a re-simulated run's signals.
+    auto residual_of = [&](const RunSignals& sim_s) {
         Eigen::VectorXd e(m);
         for (Eigen::Index i = 0; i < m; ++i) {
             double sum = 0;
@@ -232,26 +231,33 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
         }
         return e;
     };
-    // One batch of re-simulations (resimulate_many: side by side in SIMD lanes) evaluates a point
-    // q together with the forward-difference steps around it, so that when q is accepted the next
-    // iteration's Jacobian is already there: each LM iteration is one batch, not a batch plus a
-    // trial simulation. The values are those of simulating each point alone, so the fit is the
-    // same, bit for bit, as evaluating the trial first and the Jacobian after it.
+    // One batch of re-simulations (resimulate_many: side by side in SIMD lanes) evaluates a trial
+    // point q together with the forward-difference steps around it, so that when q is accepted the
+    // next iteration's Jacobian is already there. The further trials of the iteration (larger
+    // damping, each known before any is simulated: they differ only in lambda) run without their
+    // steps, in the free lanes of that batch or together in the next, and the steps follow for the
+    // one accepted. Every value is that of simulating each point alone (the lanes give the scalar path's results
+    // bit for bit), so the fit is the same, bit for bit, as trying one point after another.
     struct Point {
         sim::EmaParams params;
         Eigen::VectorXd e;                     ///< window sums of measured - model T_R at params
+        RunSignals signals;                    ///< the re-simulation at params
         std::vector<Eigen::VectorXd> stepped;  ///< the same at params + h_j along parameter j
         std::vector<double> actual;            ///< h_j after clamping to the parameter's range
+        bool with_point = true;                ///< evaluate: simulate params (false: e, signals known)
+        bool with_steps = true;                ///< evaluate: simulate the steps
     };
     auto with_fsj = [&](sim::EmaParams q) {
         q.fsj_nm = std::max(fsj_base_nm, q.fdj_nm);
         return q;
     };
-    // Evaluates each of `points` (and `extra`, whose residual goes to *extra_e) with its steps.
+    // Evaluates each of `points` (unless its with_point is false: its e and signals are known
+    // already), with its steps when its with_steps, and `extra`, whose residual goes to *extra_e.
     auto evaluate = [&](std::vector<Point>& points, const sim::EmaParams* extra, Eigen::VectorXd* extra_e) {
         std::vector<sim::EmaParams> batch;
         for (auto& pt : points) {
-            batch.push_back(with_fsj(pt.params));
+            if (pt.with_point) batch.push_back(with_fsj(pt.params));
+            if (!pt.with_steps) continue;
             pt.actual.assign(static_cast<std::size_t>(np), 0.0);
             for (Eigen::Index j = 0; j < np; ++j) {
                 const auto ju = static_cast<std::size_t>(j);
@@ -271,11 +277,15 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
         fr.simulations += static_cast<int>(runs.size());
         std::size_t k = 0;
         for (auto& pt : points) {
-            pt.e = residual_of_run(runs[k++]);
+            if (pt.with_point) {
+                pt.signals = run_signals(runs[k++]);
+                pt.e = residual_of(pt.signals);
+            }
+            if (!pt.with_steps) continue;
             pt.stepped.clear();
-            for (Eigen::Index j = 0; j < np; ++j) pt.stepped.push_back(residual_of_run(runs[k++]));
+            for (Eigen::Index j = 0; j < np; ++j) pt.stepped.push_back(residual_of(run_signals(runs[k++])));
         }
-        if (extra != nullptr) *extra_e = residual_of_run(runs[k]);
+        if (extra != nullptr) *extra_e = residual_of(run_signals(runs[k]));
     };
     fr.rows = windows.size();
     std::vector<Point> current(1);
@@ -299,37 +309,73 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
         }
         const Eigen::MatrixXd jtj = jac.transpose() * jac;
         const Eigen::VectorXd jte = jac.transpose() * e;
-        bool improved = false;
-        for (int tries = 0; tries < 4 && !improved; ++tries) {
+        // The trial point at damping lam.
+        auto trial_at = [&](double lam) {
             Eigen::MatrixXd a = jtj;
-            a.diagonal() += lambda * jtj.diagonal().cwiseMax(1e-30);
+            a.diagonal() += lam * jtj.diagonal().cwiseMax(1e-30);
             const Eigen::VectorXd delta = a.ldlt().solve(jte);
-            std::vector<Point> trial(1);
-            trial[0].params = p;
+            Point q;
+            q.params = p;
             for (Eigen::Index j = 0; j < np; ++j) {
                 const std::string& name = names[static_cast<std::size_t>(j)];
-                set_parameter(trial[0].params, name, get_parameter(p, name) + delta(j));
+                set_parameter(q.params, name, get_parameter(p, name) + delta(j));
             }
-            evaluate(trial, nullptr, nullptr);
-            const double cq = trial[0].e.squaredNorm();
-            if (cq < cost) {
-                const double gain = (cost - cq) / cost;
-                p = trial[0].params;
-                e = trial[0].e;
-                at_p = std::move(trial[0]);
-                cost = cq;
-                lambda = std::max(lambda / 10.0, 1e-9);
-                improved = true;
-                if (gain < kFitRelativeTolerance) it = max_iterations;  // converged
-            } else {
-                lambda *= 10.0;
+            return q;
+        };
+        bool improved = false;
+        auto accept = [&](Point& q) {
+            const double cq = q.e.squaredNorm();
+            const double gain = (cost - cq) / cost;
+            p = q.params;
+            e = q.e;
+            at_p = std::move(q);
+            cost = cq;
+            lambda = std::max(lambda / 10.0, 1e-9);
+            improved = true;
+            if (gain < kFitRelativeTolerance) it = max_iterations;  // converged
+        };
+        // The trials at lambda, 10 lambda, ... in order; the first that lowers the cost is taken. The
+        // first goes with its steps; further ones share its batch while they fill the last vector's
+        // free lanes (no more vector passes), the rest follow in one batch if the first ones fail.
+        std::vector<double> lambdas;
+        std::vector<Point> trials;
+        for (int tries = 0; tries < kFitTriesPerIteration; ++tries) {
+            lambdas.push_back(lambda);
+            trials.push_back(trial_at(lambda));
+            trials.back().with_steps = tries == 0;
+            lambda *= 10.0;  // the damping after this trial fails
+        }
+        const auto first_lanes = static_cast<std::size_t>(1 + np);
+        const std::size_t vector_lanes = std::max(1, sim::simd_target().lanes);
+        const std::size_t free_lanes = (vector_lanes - first_lanes % vector_lanes) % vector_lanes;
+        const std::size_t first_batch = std::min(trials.size(), 1 + free_lanes);
+        std::size_t evaluated = 0;
+        while (!improved && evaluated < trials.size()) {
+            const std::size_t count = evaluated == 0 ? first_batch : trials.size() - evaluated;
+            std::vector<Point> batch(std::make_move_iterator(trials.begin() + static_cast<std::ptrdiff_t>(evaluated)),
+                                     std::make_move_iterator(trials.begin() + static_cast<std::ptrdiff_t>(evaluated + count)));
+            evaluate(batch, nullptr, nullptr);
+            for (std::size_t i = 0; i < batch.size() && !improved; ++i) {
+                if (!(batch[i].e.squaredNorm() < cost)) continue;
+                lambda = lambdas[evaluated + i];
+                if (!batch[i].with_steps) {
+                    batch[i].with_point = false;
+                    batch[i].with_steps = true;
+                    std::vector<Point> accepted(1, std::move(batch[i]));
+                    evaluate(accepted, nullptr, nullptr);
+                    accept(accepted[0]);
+                } else {
+                    accept(batch[i]);
+                }
             }
+            evaluated += count;
         }
         if (!improved) break;
     }
     fr.params = p;
     fr.params.fsj_nm = std::max(fsj_base_nm, p.fdj_nm);
     fr.cost_end = cost;
+    fr.signals = std::move(at_p.signals);
     // Standard errors from the last Jacobian: cov = s^2 (J^T J)^-1, s^2 = cost / (m - p).
     const Eigen::MatrixXd jtj = jac.transpose() * jac;
     const double s2 = cost / std::max<double>(1.0, static_cast<double>(m - np));

@@ -21,6 +21,8 @@ inline constexpr std::size_t kFitWindowSamples = 8;
 /// Levenberg-Marquardt iterations of a re-simulation fit, and the starting damping.
 inline constexpr int kMaxFitIterations = 12;
 inline constexpr double kFitStartDamping = 1e-3;
+/// Trial points per iteration (damping lambda, 10 lambda, ...) before the fit stops.
+inline constexpr int kFitTriesPerIteration = 4;
 /// The fit stops when an accepted step lowers the cost by less than this fraction.
 inline constexpr double kFitRelativeTolerance = 1e-4;
 
@@ -73,6 +75,7 @@ struct FitResult {
     std::size_t rows = 0;                 ///< window sums in the cost
     int iterations = 0;
     int simulations = 0;
+    RunSignals signals;  ///< the re-simulated run at params (no need to simulate it again)
 };
 
 /// Levenberg-Marquardt on the torque residual (measured T_R - re-simulated T_R over `mask`, summed

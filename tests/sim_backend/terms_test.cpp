@@ -7,6 +7,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <random>
 
 namespace emadiag::sim {
 namespace {
@@ -124,6 +127,68 @@ TEST(Terms, BatchRunsTermsInItsLanesWithTheScalarPathsResults) {
     mixed[2].params.terms[0] = parse_term("torque: 0.02*sin(theta_u, 5)");
     const auto rm = simulate_batch(mixed, 1);
     for (std::size_t i = 0; i < mixed.size(); ++i) EXPECT_EQ(max_speed_difference(rm[i], simulate(mixed[i])), 0.0) << "lane " << i;
+}
+
+// Periodic bases (term_eval.hpp: fdlibm's kernels, not the C library's calls) are within 1 ulp of
+// std::sin / std::cos, over the range the signals take and beyond it (there the C library is used).
+TEST(Terms, PeriodicBasesAreWithinOneUlpOfTheCLibrary) {
+    constexpr std::uint64_t kSeed = 20261125;
+    std::printf("seed %llu\n", static_cast<unsigned long long>(kSeed));
+    std::mt19937_64 g(kSeed);
+    Term s = parse_term("torque: 1*sin(t, 1)");
+    Term c = parse_term("torque: 1*cos(t, 1)");
+    auto ulps = [](double got, double want) {
+        if (got == want) return 0.0;
+        const double ulp = std::nextafter(std::abs(want), INFINITY) - std::abs(want);
+        return std::abs(got - want) / ulp;
+    };
+    double worst = 0;
+    for (const double range : {0.3, 3.0, 300.0, 3e5, 3e7}) {
+        std::uniform_real_distribution<double> u(-range, range);
+        for (int k = 0; k < 20000; ++k) {
+            TermInputs x;
+            x.t = u(g);
+            const double arg = 2.0 * std::numbers::pi * x.t / 1.0;
+            worst = std::max({worst, ulps(term_basis(s, x), std::sin(arg)), ulps(term_basis(c, x), std::cos(arg))});
+            ASSERT_LE(worst, 1.0) << "t = " << x.t << " (seed " << kSeed << ")";
+        }
+    }
+    // Arguments next to multiples of pi/2, where the reduction cancels.
+    for (int k = -2000; k <= 2000; ++k) {
+        TermInputs x;
+        x.t = k * 0.25;
+        for (int d = 0; d < 4; ++d) {
+            const double arg = 2.0 * std::numbers::pi * x.t / 1.0;
+            EXPECT_LE(ulps(term_basis(s, x), std::sin(arg)), 1.0) << "t = " << x.t;
+            EXPECT_LE(ulps(term_basis(c, x), std::cos(arg)), 1.0) << "t = " << x.t;
+            x.t = std::nextafter(x.t, INFINITY);
+        }
+    }
+}
+
+// Lanes full of periodic terms (sin/cos pairs in both angles, a product with a bump, time) over two
+// vectors, and a batch with more periodic factors than one step gathers (evaluated lane by lane):
+// each lane has the scalar path's result bit for bit.
+TEST(Terms, BatchRunsManyPeriodicTermsWithTheScalarPathsResults) {
+    const std::vector<std::string> texts = {"torque: 0.03*sin(theta_u, 5)", "torque: -0.02*cos(theta_u, 5)",
+                                            "torque: 0.02*sin(theta_m, 40)", "torque: 0.01*cos(theta_m, 40)",
+                                            "torque: 0.02*gauss(theta_u, -3, 2)*sin(t, 0.05)",
+                                            "torque: 0.01*sgn(w)*cos(w, 300)"};
+    for (const std::size_t copies : {std::size_t{1}, std::size_t{3}}) {
+        std::vector<SimConfig> cs(9, case_b_dyn());
+        for (std::size_t i = 0; i < cs.size(); ++i) {
+            for (std::size_t r = 0; r < copies; ++r) {
+                for (const auto& t : texts) cs[i].params.terms.push_back(parse_term(t));
+            }
+            cs[i].params.terms[i % texts.size()].coefficient *= 1.5;
+            cs[i].params.fdj_nm = 0.06 + 0.005 * static_cast<double>(i);
+        }
+        cs[4].params.terms.clear();  // a lane without terms between lanes with them
+        const auto rs = simulate_batch(cs, 1);
+        for (std::size_t i = 0; i < cs.size(); i += 2) {
+            EXPECT_EQ(max_speed_difference(rs[i], simulate(cs[i])), 0.0) << "lane " << i << ", copies " << copies;
+        }
+    }
 }
 
 }  // namespace
