@@ -15,6 +15,9 @@ if [ "${1:-}" != --inner ]; then
   [ $# -ge 1 ] && [ -d "$1" ] || { echo "usage: $0 BUILD_DIR [KILLS]" >&2; exit 2; }
   build=$(cd "$1" && pwd)
   here=$(cd "$(dirname "$0")" && pwd)
+  # The guest's time limit grows with the kills: each is a test run of about 8 s in user-mode Linux,
+  # then recover and the checks (50 kills ran past with_vcan.sh's default 600 s and were stopped).
+  export EMADIAG_UML_TIMEOUT_S=${EMADIAG_UML_TIMEOUT_S:-$((300 + 30 * ${2:-50}))}
   exec "$here/../vcan/with_vcan.sh" "$build/kills-uml" bash "$here/run_test_run_kills.sh" --inner "$build" "${2:-50}"
 fi
 build=$2
