@@ -191,5 +191,31 @@ same "trend N2EM json" trend --tail N2EM --format json --draws 500
 out="$("$E" report --db "$U" --tail N9ZZ 2>&1)"; rc=$?
 [ $rc -ne 0 ] && grep -q "is not in" <<< "$out" && pass "an unknown tail from PostgreSQL: $(head -1 <<< "$out" | cut -c1-120)" || fail "unknown tail: $out"
 
+# ---- 7. a fleet server at every earlier schema version, with sessions, migrated to the newest ----
+S="$here/../../maintenance_db/pg_schema"
+newest=$(ls "$S"/*.sql | wc -l)
+for v in $(seq 1 $((newest - 1))); do
+  db="fleet_v$v"
+  DB=postgres admin -c "CREATE DATABASE $db"
+  for f in $(ls "$S"/*.sql | sort | head -$v); do DB=$db admin -f "$f" > /dev/null || fail "schema $f on $db"; done
+  DB=$db admin -c "CREATE TABLE fleet_schema_version (version integer NOT NULL); INSERT INTO fleet_schema_version VALUES ($v);
+                   GRANT SELECT ON fleet_schema_version TO emadiag_station"
+  # The station syncs to the old server (this emadiag's sync writes what every version accepts), then
+  # the server is migrated in place, and another station syncs to it, the same tail N1EM.
+  "$E" sync --db a.db --to "$(uri $db station_a)" --batch 4 > "sync_v$v.txt" 2>&1 || fail "sync to schema $v: $(tail -2 sync_v$v.txt)"
+  out="$("$E" fleet-server --to "$(uri $db fleet_admin)" 2>&1)" || fail "migrating $db: $out"
+  "$E" sync --db b.db --to "$(uri $db station_b)" --batch 4 >> "sync_v$v.txt" 2>&1 || fail "sync after migrating $db: $(tail -2 sync_v$v.txt)"
+  again="$("$E" sync --db a.db --to "$(uri $db station_a)" 2>&1)"
+  got=$(DB=$db admin -c "SELECT (SELECT version FROM fleet_schema_version) || ' ' || count(*) FROM test_sessions")
+  refused="$(psql -X -q -At "$(uri $db station_b)" -c "INSERT INTO findings(session_id, parameter, estimator, limit_kind, status) SELECT min(session_id), 'X', 'physics', 'none', 'WITHIN' FROM test_sessions WHERE station_role = 'station_a'" 2>&1)"
+  if [ "$got" = "$newest $(( $(count a.db) + $(count b.db) ))" ] && grep -q ": 0 session(s) pushed" <<< "$again" && grep -q "violates foreign key" <<< "$refused" &&
+     oa="$(python3 "$here/compare_summaries.py" a.db "$(uri $db station_a)")" && ob="$(python3 "$here/compare_summaries.py" b.db "$(uri $db station_b)")"; then
+    pass "schema $v -> $newest with sessions on it: version and sessions '$got'; re-sync pushes nothing; a finding into another station's session refused; a: $oa; b: $ob"
+  else fail "schema $v -> $newest: '$got' (want '$newest $(( $(count a.db) + $(count b.db) ))'); re-sync: $again; refused: $refused; a: ${oa:-}; b: ${ob:-}"; fi
+done
+U="$(uri fleet_v1 station_a)"
+# N2EM is station a's alone (N1EM has sessions of station b too): its report equals the one from a.db.
+for fmt in text json; do same "report N2EM --format $fmt from a server migrated from schema 1" report --tail N2EM --format "$fmt" --draws 500; done
+
 echo "pg_tests: $fails failure(s)"
 [ $fails -eq 0 ]

@@ -209,7 +209,12 @@ std::vector<StoredTestSession> PgRecordSource::sessions_of_serial(const std::str
     return sessions_where("s.actuator_serial = $1", actuator_serial, parts);
 }
 bool PgRecordSource::serial_seen_elsewhere(const std::string& serial, const std::string& tail) {
-    return !pg_.query("SELECT 1 FROM test_sessions WHERE actuator_serial = $1 AND tail_number <> $2 LIMIT 1", {serial, tail}).empty();
+    // Two probes of the index (actuator_serial, tail_number, ...) of schema 3: a tail before this one, a tail after it.
+    return pg_.query("SELECT EXISTS (SELECT 1 FROM test_sessions WHERE actuator_serial = $1 AND tail_number < $2) OR "
+                     "EXISTS (SELECT 1 FROM test_sessions WHERE actuator_serial = $1 AND tail_number > $2)",
+                     {serial, tail})
+               .at(0)
+               .at(0) == std::optional<std::string>("t");
 }
 std::vector<StoredInstallation> PgRecordSource::installations_of_tail(const std::string& tail_number) {
     check_tail_number(tail_number);

@@ -11,8 +11,10 @@
 #include <chrono>
 #include <charconv>
 #include <ctime>
+#include <deque>
 #include <map>
 #include <set>
+#include <tuple>
 #include <unordered_map>
 
 namespace emadiag::db {
@@ -438,31 +440,57 @@ private:
                         std::to_string(batch_ids.at(st.column_int(7))) + '\n');
             });
             // The summary terms, in the order the station applied them (add_to_summaries): per session, the
-            // amended session's measurements out (-1), then the session's own in (+1).
+            // amended session's measurements out (-1), then the session's own in (+1). Sent sorted by series
+            // (byte order, as COLLATE "C"), then by that order: the server's summary statement sorts them so,
+            // and finds them already sorted (pg_schema/003).
+            struct Term {
+                const std::string *tail, *position, *serial, *parameter;
+                std::int64_t session_id;
+                int ordinal;
+                std::string line;
+            };
+            std::vector<Term> terms;
+            std::vector<std::string> parameters;
+            std::deque<LightSession> amended;  // sessions of earlier batches that this one amends (a deque: stable addresses)
+            static const std::string kNoPosition;
+            for (const auto id : ids) {
+                const LightSession& l = light.at(id);
+                int ordinal = 0;
+                const auto emit = [&](const LightSession& s, int sign) {
+                    const double days = utc_days(s.started_utc);
+                    for (const auto& m : session_measurements(s.findings)) {
+                        const double w = sign / (m.std_error * m.std_error);
+                        const std::int64_t sid = batch_ids.at(id);
+                        const int ord = ordinal++;
+                        std::string line = std::to_string(sid) + '\t' + std::to_string(ord) + '\t' + std::to_string(sign) + '\t' +
+                                           std::to_string(fleet(s.id)) + '\t' + f(s.tail) + '\t' + f(s.position.value_or("")) + '\t' + f(s.serial) +
+                                           '\t' + f(m.parameter) + '\t' + d2s(days) + '\t' + d2s(w) + '\t' + d2s(w * m.value) + '\t' +
+                                           d2s(w * m.value * m.value) + '\t' + (s.cycles ? d2s(static_cast<double>(*s.cycles)) : std::string("\\N")) +
+                                           '\t' + d2s(m.value) + '\t' + d2s(m.std_error) + '\t' + f(m.limit_kind) + '\t' + opt_d(m.limit_value) + '\n';
+                        terms.push_back({&s.tail, s.position ? &*s.position : &kNoPosition, &s.serial, nullptr, sid, ord, std::move(line)});
+                        parameters.push_back(m.parameter);
+                    }
+                };
+                if (l.amends) {
+                    const auto it = light.find(*l.amends);
+                    if (it != light.end()) {
+                        emit(it->second, -1);
+                    } else {
+                        amended.push_back(load_light(db_, *l.amends));
+                        emit(amended.back(), -1);
+                    }
+                }
+                emit(l, +1);
+            }
+            for (std::size_t i = 0; i < terms.size(); ++i) terms[i].parameter = &parameters[i];
+            std::sort(terms.begin(), terms.end(), [](const Term& a, const Term& b) {
+                return std::tie(*a.tail, *a.position, *a.serial, *a.parameter, a.session_id, a.ordinal) <
+                       std::tie(*b.tail, *b.position, *b.serial, *b.parameter, b.session_id, b.ordinal);
+            });
             pg_.copy_in("session_measurements (session_id, ordinal, sign, of_session_id, tail_number, position, actuator_serial, parameter, days, "
                         "w, wy, wyy, cycles, value, std_error, limit_kind, limit_value)",
                         [&](const auto& put) {
-                            for (const auto id : ids) {
-                                const LightSession& l = light.at(id);
-                                int ordinal = 0;
-                                const auto emit = [&](const LightSession& s, int sign) {
-                                    const double days = utc_days(s.started_utc);
-                                    for (const auto& m : session_measurements(s.findings)) {
-                                        const double w = sign / (m.std_error * m.std_error);
-                                        put(std::to_string(batch_ids.at(id)) + '\t' + std::to_string(ordinal++) + '\t' + std::to_string(sign) + '\t' +
-                                            std::to_string(fleet(s.id)) + '\t' + f(s.tail) + '\t' + f(s.position.value_or("")) + '\t' + f(s.serial) +
-                                            '\t' + f(m.parameter) + '\t' + d2s(days) + '\t' + d2s(w) + '\t' + d2s(w * m.value) + '\t' +
-                                            d2s(w * m.value * m.value) + '\t' +
-                                            (s.cycles ? d2s(static_cast<double>(*s.cycles)) : std::string("\\N")) + '\t' + d2s(m.value) + '\t' +
-                                            d2s(m.std_error) + '\t' + f(m.limit_kind) + '\t' + opt_d(m.limit_value) + '\n');
-                                    }
-                                };
-                                if (l.amends) {
-                                    const auto it = light.find(*l.amends);
-                                    emit(it != light.end() ? it->second : load_light(db_, *l.amends), -1);
-                                }
-                                emit(l, +1);
-                            }
+                            for (const auto& t : terms) put(t.line);
                         });
             pg_.exec("COMMIT");
         } catch (const DbError& e) {
