@@ -58,14 +58,55 @@ REVOKE EXECUTE ON FUNCTION check_rows_session() FROM PUBLIC;
 DO $$
 DECLARE t text;
 BEGIN
-    FOREACH t IN ARRAY ARRAY['runs', 'findings', 'session_artifacts', 'installations', 'session_measurements'] LOOP
+    FOREACH t IN ARRAY ARRAY['runs', 'session_artifacts', 'installations', 'session_measurements'] LOOP
         EXECUTE format('CREATE TRIGGER %I AFTER INSERT ON %I REFERENCING NEW TABLE AS new_rows FOR EACH STATEMENT '
                        'EXECUTE FUNCTION check_rows_session()', t || '_session_check', t);
     END LOOP;
 END $$;
 
+-- 4. Each finding keeps its session's tail, and an index by tail holds every column the report reads:
+--    a tail's findings are one index range (an index-only scan), not a probe per session. A sync
+--    of this version sends the tail (checked against the session's below); an older one does not,
+--    and the check fills it in from the session.
+--    That index is also the findings' key (a session has one tail, so (session_id, parameter,
+--    estimator) stays unique), and replaces the primary key: one index per finding, not two.
+ALTER TABLE findings ADD COLUMN tail_number text COLLATE "C";
+UPDATE findings f SET tail_number = s.tail_number FROM test_sessions s WHERE s.session_id = f.session_id;
+CREATE UNIQUE INDEX findings_by_tail ON findings(tail_number, session_id, parameter, estimator)
+    INCLUDE (value, std_error, limit_value, limit_kind, status, note);
+ALTER TABLE findings DROP CONSTRAINT findings_pkey;
+CREATE INDEX findings_without_tail ON findings(session_id) WHERE tail_number IS NULL;  -- an older sync's rows, until filled in
+GRANT INSERT (tail_number) ON findings TO emadiag_station;
+
+CREATE FUNCTION check_findings_session() RETURNS trigger LANGUAGE plpgsql SECURITY DEFINER SET search_path = public
+    SET enable_hashjoin = off SET enable_mergejoin = off AS $$
+DECLARE
+    bad record;
+BEGIN
+    IF EXISTS (SELECT 1 FROM new_rows r WHERE r.tail_number IS NULL) THEN
+        UPDATE findings f SET tail_number = s.tail_number FROM test_sessions s
+        WHERE f.tail_number IS NULL AND s.session_id = f.session_id AND s.station_role = f.station_role;
+    END IF;
+    SELECT n.session_id, n.station_role, n.tail_number INTO bad
+    FROM (SELECT DISTINCT r.session_id, r.station_role, r.tail_number FROM new_rows r) n
+    WHERE NOT EXISTS (SELECT 1 FROM test_sessions s WHERE s.session_id = n.session_id AND s.station_role = n.station_role
+                                                      AND (n.tail_number IS NULL OR s.tail_number = n.tail_number))
+    LIMIT 1;
+    IF FOUND THEN
+        RAISE EXCEPTION 'insert or update on table "findings" violates foreign key constraint "findings_session_check"'
+            USING ERRCODE = 'foreign_key_violation',
+                  DETAIL = format('Key (session_id, station_role, tail_number)=(%s, %s, %s) is not present in table "test_sessions".',
+                                  bad.session_id, bad.station_role, bad.tail_number);
+    END IF;
+    RETURN NULL;
+END $$;
+REVOKE EXECUTE ON FUNCTION check_findings_session() FROM PUBLIC;
+
 DROP INDEX test_sessions_by_serial;
 CREATE INDEX test_sessions_by_serial ON test_sessions(actuator_serial, tail_number, started_utc, session_id);
+
+CREATE TRIGGER findings_session_check AFTER INSERT ON findings REFERENCING NEW TABLE AS new_rows FOR EACH STATEMENT
+    EXECUTE FUNCTION check_findings_session();
 
 -- The summary function of version 2 with its sums and "last" fields as window aggregates (see 2.).
 CREATE OR REPLACE FUNCTION apply_measurements_batch() RETURNS trigger LANGUAGE plpgsql SECURITY DEFINER SET search_path = public SET enable_nestloop = off AS $$
