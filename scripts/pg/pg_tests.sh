@@ -161,6 +161,13 @@ check_refused "INSERT of a finding into station_a's session posing as station_a"
   "$(st station_b "INSERT INTO findings(session_id, station_role, parameter, estimator, limit_kind, status) VALUES ($a_sid, 'station_a', 'X', 'physics', 'none', 'WITHIN')")"
 check_refused "INSERT of a session under station_a's station identity" "violates foreign key constraint \"test_sessions_station_uuid_station_role_fkey\"" \
   "$(st station_b "INSERT INTO test_sessions(session_uuid, station_uuid, station_session_id, tail_number, phase, started_utc, verdict, prev_sha256, content_sha256) SELECT gen_random_uuid(), station_uuid, 999999, 'N1EM', 'pre-flight', '2027-01-01T00:00:00Z', 'SERVICEABLE', '', repeat('0', 64) FROM stations WHERE station_role = 'station_a'")"
+check_refused "INSERT of a finding into its own session under another tail" "violates foreign key constraint \"findings_session_check\"" \
+  "$(st station_b "INSERT INTO findings(session_id, parameter, estimator, limit_kind, status, tail_number) VALUES ($b_sid, 'Z', 'physics', 'none', 'WITHIN', 'N3EM')")"
+# A finding as a sync older than schema 3 sends it (no tail): accepted, its tail taken from its session.
+own="$(st station_b "INSERT INTO findings(session_id, parameter, estimator, limit_kind, status) VALUES ($b_sid, 'Y', 'physics', 'none', 'WITHIN')")"
+filled=$(admin -c "SELECT f.tail_number || ' ' || (f.tail_number = s.tail_number) FROM findings f JOIN test_sessions s USING (session_id) WHERE f.session_id = $b_sid AND f.parameter = 'Y'")
+[ -z "$own" ] && [ "${filled#* }" = true ] && pass "a finding without a tail into station_b's own session: accepted, tail ${filled% *} filled in from the session" ||
+  fail "finding without a tail: '$own', tail '$filled'"
 after=$(admin -c "SELECT md5(string_agg(t::text, '' ORDER BY session_id)) FROM test_sessions t")
 reads=$(st station_b "SELECT count(*) FROM test_sessions")
 [ "$before" = "$after" ] && [ "$reads" = "$(admin -c "SELECT count(*) FROM test_sessions")" ] &&
@@ -175,9 +182,10 @@ same() {  # label, then the command's arguments after --db
   local label="$1"; shift
   local cmd="$1"; shift
   local lite pgout
-  lite="$("$E" "$cmd" --db a.db "$@" 2>&1)" || { fail "$label from SQLite: $lite"; return; }
+  local file="${LITE:-a.db}"
+  lite="$("$E" "$cmd" --db "$file" "$@" 2>&1)" || { fail "$label from SQLite: $lite"; return; }
   pgout="$("$E" "$cmd" --db "$U" "$@" 2>&1)" || { fail "$label from PostgreSQL: $pgout"; return; }
-  lite="${lite//"a.db"/"$U"}"  # the one difference: the database is named as given
+  lite="${lite//"$file"/"$U"}"  # the one difference: the database is named as given
   if [ "$lite" = "$pgout" ]; then pass "$label: byte for byte the same ($(wc -c <<< "$pgout") bytes)"
   else fail "$label differs:"; diff <(echo "$lite") <(echo "$pgout") | head -10; fi
 }
@@ -190,6 +198,42 @@ same "trend N1EM text" trend --tail N1EM --phase all --draws 500
 same "trend N2EM json" trend --tail N2EM --format json --draws 500
 out="$("$E" report --db "$U" --tail N9ZZ 2>&1)"; rc=$?
 [ $rc -ne 0 ] && grep -q "is not in" <<< "$out" && pass "an unknown tail from PostgreSQL: $(head -1 <<< "$out" | cut -c1-120)" || fail "unknown tail: $out"
+
+# An actuator moved from one tail to another: the report reads its sessions on the other tail too
+# (serial_seen_elsewhere, sessions_of_serial: by tails and ids on schema 3).
+sim --db m.db --tail N1EM --position LH-ELEV --sessions 4 --serial S-MOVED
+sim --db m.db --tail N2EM --position LH-ELEV --sessions 3 --serial S-MOVED --start-utc 2026-08-01T08:00:00Z
+DB=postgres admin -c "CREATE DATABASE fleet2"
+"$E" fleet-server --to "$(uri fleet2 fleet_admin)" > /dev/null || fail "fleet-server fleet2"
+"$E" sync --db m.db --to "$(uri fleet2 station_c)" > /dev/null || fail "sync m.db to fleet2"
+U="$(uri fleet2 station_c)"
+for t in N1EM N2EM; do LITE=m.db same "report $t, its actuator S-MOVED also on the other tail" report --tail $t --format json --draws 500; done
+
+# ---- 7. a fleet server at every earlier schema version, with sessions, migrated to the newest ----
+S="$here/../../maintenance_db/pg_schema"
+newest=$(ls "$S"/*.sql | wc -l)
+for v in $(seq 1 $((newest - 1))); do
+  db="fleet_v$v"
+  DB=postgres admin -c "CREATE DATABASE $db"
+  for f in $(ls "$S"/*.sql | sort | head -$v); do DB=$db admin -f "$f" > /dev/null || fail "schema $f on $db"; done
+  DB=$db admin -c "CREATE TABLE fleet_schema_version (version integer NOT NULL); INSERT INTO fleet_schema_version VALUES ($v);
+                   GRANT SELECT ON fleet_schema_version TO emadiag_station"
+  # The station syncs to the old server (this emadiag's sync writes what every version accepts), then
+  # the server is migrated in place, and another station syncs to it, the same tail N1EM.
+  "$E" sync --db a.db --to "$(uri $db station_a)" --batch 4 > "sync_v$v.txt" 2>&1 || fail "sync to schema $v: $(tail -2 sync_v$v.txt)"
+  out="$("$E" fleet-server --to "$(uri $db fleet_admin)" 2>&1)" || fail "migrating $db: $out"
+  "$E" sync --db b.db --to "$(uri $db station_b)" --batch 4 >> "sync_v$v.txt" 2>&1 || fail "sync after migrating $db: $(tail -2 sync_v$v.txt)"
+  again="$("$E" sync --db a.db --to "$(uri $db station_a)" 2>&1)"
+  got=$(DB=$db admin -c "SELECT (SELECT version FROM fleet_schema_version) || ' ' || count(*) FROM test_sessions")
+  refused="$(psql -X -q -At "$(uri $db station_b)" -c "INSERT INTO findings(session_id, parameter, estimator, limit_kind, status) SELECT min(session_id), 'X', 'physics', 'none', 'WITHIN' FROM test_sessions WHERE station_role = 'station_a'" 2>&1)"
+  if [ "$got" = "$newest $(( $(count a.db) + $(count b.db) ))" ] && grep -q ": 0 session(s) pushed" <<< "$again" && grep -q "violates foreign key" <<< "$refused" &&
+     oa="$(python3 "$here/compare_summaries.py" a.db "$(uri $db station_a)")" && ob="$(python3 "$here/compare_summaries.py" b.db "$(uri $db station_b)")"; then
+    pass "schema $v -> $newest with sessions on it: version and sessions '$got'; re-sync pushes nothing; a finding into another station's session refused; a: $oa; b: $ob"
+  else fail "schema $v -> $newest: '$got' (want '$newest $(( $(count a.db) + $(count b.db) ))'); re-sync: $again; refused: $refused; a: ${oa:-}; b: ${ob:-}"; fi
+done
+U="$(uri fleet_v1 station_a)"
+# N2EM is station a's alone (N1EM has sessions of station b too): its report equals the one from a.db.
+for fmt in text json; do same "report N2EM --format $fmt from a server migrated from schema 1" report --tail N2EM --format "$fmt" --draws 500; done
 
 echo "pg_tests: $fails failure(s)"
 [ $fails -eq 0 ]

@@ -98,6 +98,7 @@ PgRecordSource::PgRecordSource(const std::string& uri) : pg_(uri) {
                       DbErrorKind::Invalid);
     // One snapshot for the whole report: a sync committing meanwhile shows entirely or not at all.
     pg_.exec("BEGIN ISOLATION LEVEL REPEATABLE READ READ ONLY");
+    schema_version_ = std::stoi(pg_.query("SELECT coalesce(max(version), 0) FROM fleet_schema_version").at(0).at(0).value_or("0"));
 }
 
 std::vector<std::string> PgRecordSource::tail_numbers() {
@@ -119,7 +120,8 @@ std::string bigint_array(const std::vector<Row>& rows, Id id) {
 }
 }  // namespace
 
-std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string& where, const std::string& value, const SessionListParts& parts) {
+std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string& where, const std::string& value, const SessionListParts& parts,
+                                                              bool by_tail) {
     std::vector<StoredTestSession> out;
     std::unordered_map<std::int64_t, std::size_t> index;
     pg_.each_row(std::string("SELECT ") + kSessionColumns + " WHERE " + where + " ORDER BY s.started_utc, s.session_id", {value}, [&](const Row& r) {
@@ -129,11 +131,36 @@ std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string&
     if (out.empty()) return out;
     // The rows of these sessions by their ids (index scans on each table's key), not by a join on the
     // condition: the planner's join over the whole fleet's findings is what a report cannot afford.
+    // A tail's findings on schema 3: one range of the index (tail_number, session_id, parameter, estimator)
+    // that holds every column the report reads (an index-only scan once vacuum has marked the pages).
+    // The sessions of a serial: by their tails and ids (schema 3 has no index of findings by session id alone).
     const std::string id_array = bigint_array(out, [](const StoredTestSession& s) { return s.session_id; });
+    std::string findings_where = "f.session_id = ANY($1::bigint[])";
+    std::vector<std::optional<std::string>> findings_params{id_array};
+    if (schema_version_ >= 3 && by_tail) {
+        findings_where = "f.tail_number = $1";
+        findings_params = {value};
+    } else if (schema_version_ >= 3) {
+        std::vector<std::string> tails;
+        for (const auto& s : out) tails.push_back(s.tail_number);
+        std::sort(tails.begin(), tails.end());
+        tails.erase(std::unique(tails.begin(), tails.end()), tails.end());
+        std::string a;
+        for (const auto& t : tails) {
+            a += a.empty() ? "{\"" : ",\"";
+            for (const char c : t) {
+                if (c == '"' || c == '\\') a += '\\';
+                a += c;
+            }
+            a += '"';
+        }
+        findings_where = "f.tail_number = ANY($2::text[]) AND f.session_id = ANY($1::bigint[])";
+        findings_params = {id_array, a + "}"};
+    }
     pg_.each_row(
-        "SELECT f.session_id, f.parameter, f.estimator, f.value, f.std_error, f.limit_value, f.limit_kind, f.status, "
-        "f.note FROM findings f WHERE f.session_id = ANY($1::bigint[]) ORDER BY f.session_id, f.parameter, f.estimator",
-        {id_array}, [&](const Row& r) {
+        "SELECT f.session_id, f.parameter, f.estimator, f.value, f.std_error, f.limit_value, f.limit_kind, f.status, f.note FROM findings f WHERE " +
+            findings_where + " ORDER BY f.session_id, f.parameter, f.estimator",
+        findings_params, [&](const Row& r) {
             StoredFinding f;
             f.parameter = text(r, 1);
             f.estimator = text(r, 2);
@@ -202,14 +229,19 @@ std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string&
 
 std::vector<StoredTestSession> PgRecordSource::sessions_of_tail(const std::string& tail_number, const SessionListParts& parts) {
     check_tail_number(tail_number);
-    return sessions_where("s.tail_number = $1", tail_number, parts);
+    return sessions_where("s.tail_number = $1", tail_number, parts, true);
 }
 std::vector<StoredTestSession> PgRecordSource::sessions_of_serial(const std::string& actuator_serial, const SessionListParts& parts) {
     if (actuator_serial.empty()) throw DbError("an empty actuator serial names no actuator", DbErrorKind::Invalid);
-    return sessions_where("s.actuator_serial = $1", actuator_serial, parts);
+    return sessions_where("s.actuator_serial = $1", actuator_serial, parts, false);
 }
 bool PgRecordSource::serial_seen_elsewhere(const std::string& serial, const std::string& tail) {
-    return !pg_.query("SELECT 1 FROM test_sessions WHERE actuator_serial = $1 AND tail_number <> $2 LIMIT 1", {serial, tail}).empty();
+    // Two probes of the index (actuator_serial, tail_number, ...) of schema 3: a tail before this one, a tail after it.
+    return pg_.query("SELECT EXISTS (SELECT 1 FROM test_sessions WHERE actuator_serial = $1 AND tail_number < $2) OR "
+                     "EXISTS (SELECT 1 FROM test_sessions WHERE actuator_serial = $1 AND tail_number > $2)",
+                     {serial, tail})
+               .at(0)
+               .at(0) == std::optional<std::string>("t");
 }
 std::vector<StoredInstallation> PgRecordSource::installations_of_tail(const std::string& tail_number) {
     check_tail_number(tail_number);

@@ -11,8 +11,10 @@
 #include <chrono>
 #include <charconv>
 #include <ctime>
+#include <deque>
 #include <map>
 #include <set>
+#include <tuple>
 #include <unordered_map>
 
 namespace emadiag::db {
@@ -149,6 +151,7 @@ public:
         if (v.at(0).at(0) != std::optional<std::string>("t"))
             throw DbError("fleet server " + server_ + " has no emadiag schema (run `emadiag fleet-server --to URI` as its owner first)",
                           DbErrorKind::Invalid);
+        server_version_ = std::stoi(pg_.query("SELECT coalesce(max(version), 0) FROM fleet_schema_version").at(0).at(0).value_or("0"));
         pg_.query("INSERT INTO stations(station_uuid) VALUES ($1) ON CONFLICT DO NOTHING", {res_.station_uuid});
         const auto who = pg_.query("SELECT station_role, current_user FROM stations WHERE station_uuid = $1", {res_.station_uuid});
         if (who.empty() || who[0][0] != who[0][1])
@@ -340,12 +343,17 @@ private:
                 const auto it = batch_ids.find(local);
                 return it != batch_ids.end() ? it->second : fleet_session_of(local);
             };
+            // Sessions and findings go in grouped by tail (in the batch's order within a tail): a tail's rows then
+            // share heap pages, which is what a report for one tail reads.
+            std::vector<std::size_t> by_tail(ids.size());
+            for (std::size_t i = 0; i < ids.size(); ++i) by_tail[i] = i;
+            std::stable_sort(by_tail.begin(), by_tail.end(), [&](std::size_t a, std::size_t b) { return light.at(ids[a]).tail < light.at(ids[b]).tail; });
             pg_.copy_in("test_sessions (session_id, session_uuid, station_uuid, station_session_id, tail_number, position, actuator_serial, "
                         "phase, started_utc, cycles, hours_h, operator_id, technician_name, technician_certificate, work_performed, source, "
                         "tool_version, verdict, verdict_note, limits_json, limits_sha256, correction_reason, prev_sha256, content_sha256, "
                         "amends_session_id)",
                         [&](const auto& put) {
-                            for (std::size_t i = 0; i < ids.size(); ++i) {
+                            for (const std::size_t i : by_tail) {
                                 const LightSession& l = light.at(ids[i]);
                                 put(std::to_string(sids[i]) + '\t' + session_uuid(res_.station_uuid, ids[i]) + '\t' + res_.station_uuid + '\t' +
                                     std::to_string(ids[i]) + '\t' + session_lines[i] + '\t' + (l.amends ? std::to_string(fleet(*l.amends)) : "\\N") +
@@ -415,12 +423,19 @@ private:
                     }
                 });
             }
-            pg_.copy_in("findings (session_id, parameter, estimator, value, std_error, limit_value, limit_kind, status, note)", [&](const auto& put) {
-                for (const auto id : ids)
-                    for (const auto& x : light.at(id).findings)
-                        put(std::to_string(batch_ids.at(id)) + '\t' + f(x.parameter) + '\t' + f(x.estimator) + '\t' + opt_d(x.value) + '\t' +
-                            opt_d(x.std_error) + '\t' + opt_d(x.limit_value) + '\t' + f(x.limit_kind) + '\t' + f(x.status) + '\t' + f(x.note) + '\n');
-            });
+            // Schema 3 keeps each finding's tail beside it (the report reads a tail's findings as one index range).
+            const bool finding_tails = server_version_ >= 3;
+            pg_.copy_in(std::string("findings (session_id, parameter, estimator, value, std_error, limit_value, limit_kind, status, note") +
+                            (finding_tails ? ", tail_number)" : ")"),
+                        [&](const auto& put) {
+                            for (const std::size_t i : by_tail) {
+                                const LightSession& l = light.at(ids[i]);
+                                for (const auto& x : l.findings)
+                                    put(std::to_string(batch_ids.at(ids[i])) + '\t' + f(x.parameter) + '\t' + f(x.estimator) + '\t' +
+                                        opt_d(x.value) + '\t' + opt_d(x.std_error) + '\t' + opt_d(x.limit_value) + '\t' + f(x.limit_kind) + '\t' +
+                                        f(x.status) + '\t' + f(x.note) + (finding_tails ? '\t' + f(l.tail) : std::string()) + '\n');
+                            }
+                        });
             pg_.copy_in("session_artifacts (session_id, role, name, sha256)", [&](const auto& put) {
                 Statement st(db_, "SELECT session_id, role, name, sha256 FROM session_artifacts WHERE session_id BETWEEN ? AND ?");
                 st.bind(1, lo).bind(2, hi);
@@ -438,31 +453,57 @@ private:
                         std::to_string(batch_ids.at(st.column_int(7))) + '\n');
             });
             // The summary terms, in the order the station applied them (add_to_summaries): per session, the
-            // amended session's measurements out (-1), then the session's own in (+1).
+            // amended session's measurements out (-1), then the session's own in (+1). Sent sorted by series
+            // (byte order, as COLLATE "C"), then by that order: the server's summary statement sorts them so,
+            // and finds them already sorted (pg_schema/003).
+            struct Term {
+                const std::string *tail, *position, *serial, *parameter;
+                std::int64_t session_id;
+                int ordinal;
+                std::string line;
+            };
+            std::vector<Term> terms;
+            std::vector<std::string> parameters;
+            std::deque<LightSession> amended;  // sessions of earlier batches that this one amends (a deque: stable addresses)
+            static const std::string kNoPosition;
+            for (const auto id : ids) {
+                const LightSession& l = light.at(id);
+                int ordinal = 0;
+                const auto emit = [&](const LightSession& s, int sign) {
+                    const double days = utc_days(s.started_utc);
+                    for (const auto& m : session_measurements(s.findings)) {
+                        const double w = sign / (m.std_error * m.std_error);
+                        const std::int64_t sid = batch_ids.at(id);
+                        const int ord = ordinal++;
+                        std::string line = std::to_string(sid) + '\t' + std::to_string(ord) + '\t' + std::to_string(sign) + '\t' +
+                                           std::to_string(fleet(s.id)) + '\t' + f(s.tail) + '\t' + f(s.position.value_or("")) + '\t' + f(s.serial) +
+                                           '\t' + f(m.parameter) + '\t' + d2s(days) + '\t' + d2s(w) + '\t' + d2s(w * m.value) + '\t' +
+                                           d2s(w * m.value * m.value) + '\t' + (s.cycles ? d2s(static_cast<double>(*s.cycles)) : std::string("\\N")) +
+                                           '\t' + d2s(m.value) + '\t' + d2s(m.std_error) + '\t' + f(m.limit_kind) + '\t' + opt_d(m.limit_value) + '\n';
+                        terms.push_back({&s.tail, s.position ? &*s.position : &kNoPosition, &s.serial, nullptr, sid, ord, std::move(line)});
+                        parameters.push_back(m.parameter);
+                    }
+                };
+                if (l.amends) {
+                    const auto it = light.find(*l.amends);
+                    if (it != light.end()) {
+                        emit(it->second, -1);
+                    } else {
+                        amended.push_back(load_light(db_, *l.amends));
+                        emit(amended.back(), -1);
+                    }
+                }
+                emit(l, +1);
+            }
+            for (std::size_t i = 0; i < terms.size(); ++i) terms[i].parameter = &parameters[i];
+            std::sort(terms.begin(), terms.end(), [](const Term& a, const Term& b) {
+                return std::tie(*a.tail, *a.position, *a.serial, *a.parameter, a.session_id, a.ordinal) <
+                       std::tie(*b.tail, *b.position, *b.serial, *b.parameter, b.session_id, b.ordinal);
+            });
             pg_.copy_in("session_measurements (session_id, ordinal, sign, of_session_id, tail_number, position, actuator_serial, parameter, days, "
                         "w, wy, wyy, cycles, value, std_error, limit_kind, limit_value)",
                         [&](const auto& put) {
-                            for (const auto id : ids) {
-                                const LightSession& l = light.at(id);
-                                int ordinal = 0;
-                                const auto emit = [&](const LightSession& s, int sign) {
-                                    const double days = utc_days(s.started_utc);
-                                    for (const auto& m : session_measurements(s.findings)) {
-                                        const double w = sign / (m.std_error * m.std_error);
-                                        put(std::to_string(batch_ids.at(id)) + '\t' + std::to_string(ordinal++) + '\t' + std::to_string(sign) + '\t' +
-                                            std::to_string(fleet(s.id)) + '\t' + f(s.tail) + '\t' + f(s.position.value_or("")) + '\t' + f(s.serial) +
-                                            '\t' + f(m.parameter) + '\t' + d2s(days) + '\t' + d2s(w) + '\t' + d2s(w * m.value) + '\t' +
-                                            d2s(w * m.value * m.value) + '\t' +
-                                            (s.cycles ? d2s(static_cast<double>(*s.cycles)) : std::string("\\N")) + '\t' + d2s(m.value) + '\t' +
-                                            d2s(m.std_error) + '\t' + f(m.limit_kind) + '\t' + opt_d(m.limit_value) + '\n');
-                                    }
-                                };
-                                if (l.amends) {
-                                    const auto it = light.find(*l.amends);
-                                    emit(it != light.end() ? it->second : load_light(db_, *l.amends), -1);
-                                }
-                                emit(l, +1);
-                            }
+                            for (const auto& t : terms) put(t.line);
                         });
             pg_.exec("COMMIT");
         } catch (const DbError& e) {
@@ -577,6 +618,7 @@ private:
     std::string server_;
     SyncOptions o_;
     SyncResult res_;
+    int server_version_ = 0;  ///< the fleet server's schema version (fleet_schema_version)
     std::unordered_map<std::int64_t, std::int64_t> fleet_id_;
 };
 

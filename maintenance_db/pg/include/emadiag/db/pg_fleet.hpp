@@ -111,8 +111,10 @@ public:
     [[nodiscard]] std::vector<PositionStatus> position_status() override;
 
 private:
-    std::vector<StoredTestSession> sessions_where(const std::string& where, const std::string& value, const SessionListParts& parts);
+    /// by_tail: `value` is a tail number (the findings then come from schema 3's index by tail).
+    std::vector<StoredTestSession> sessions_where(const std::string& where, const std::string& value, const SessionListParts& parts, bool by_tail);
     PgConnection pg_;
+    int schema_version_ = 0;
 };
 
 /// A RecordSource for --db: a fleet server for a postgresql:// URI, else the SQLite file (opened and
