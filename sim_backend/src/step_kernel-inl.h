@@ -40,10 +40,13 @@ struct Lanes {
 
 template <class M>
 inline M mask_of(bool b) { return b ? vnot(M{}) : M{}; }
+/// clamp(a, lo, hi) as sel(a < lo, lo, a), then sel(a > hi, hi, a) (NaN stays NaN); the lane type
+/// gives the two halves (clamp_below, clamp_above: one max and one min on x86 SIMD targets).
+/// The bounds are 0 + lo and 0 + hi as before (-0 becomes +0: the backlash gap's bounds with no
+/// backlash).
 template <class D>
 inline D vclamp(D a, double lo, double hi) {
-    a = sel(a < lo, D{} + lo, a);
-    return sel(a > hi, D{} + hi, a);
+    return self::clamp_above(self::clamp_below(a, 0.0 + lo), 0.0 + hi);
 }
 
 /// One step with the command of step n, cmd_m = tau * radians(command_deg(t = n dt)), computed by
@@ -78,9 +81,9 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     // 1. Command: cmd_m (shared by all lanes).
     // 2. Controller.
     const D w_ref = vclamp(s.k_theta * (cmd_m - z.th), -s.w_max, s.w_max);
-    const D i_pos = vclamp(s.k_w * (w_ref - z.w), -s.i_max, s.i_max);
-    D i_ref = i_pos;
+    D i_ref = zero;  // BRK only: the other sequences compare with I_ref's clamp below without forming it
     if (s.sequence == Sequence::Brk) {
+        const D i_pos = vclamp(s.k_w * (w_ref - z.w), -s.i_max, s.i_max);
         i_ref = sel(ramping, vclamp(z.ramp_i, -s.i_max, s.i_max), i_pos);
         z.ramp_i = sel(ramping, z.ramp_i + ramp_rate, z.ramp_i);
         z.last_iref = i_ref;
