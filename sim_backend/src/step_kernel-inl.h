@@ -190,13 +190,21 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         }
     }
     const D t_act = t_m - f_r - t_x;
-    const M moving = vnot(w0 == 0.0);
+    const M still = w0 == 0.0;
+    const M moving = vnot(still);
     const M w_pos = w0 > 0.0;
     // Direction d = +1 where d_pos, else -1: sgn(w) while moving, sgn(T_act) (-1 at 0) while stuck.
-    const M d_pos = w_pos | (vnot(moving) & (t_act > 0.0));
-    // F_R d > 0 (opposing), without the multiplication by d = +/-1.
-    const M opposing = (d_pos & (f_r > 0.0)) | (vnot(d_pos) & (f_r < 0.0));
-    const D c = sel(opposing, z.c_opp, z.c_aid);
+    const M d_pos = w_pos | (still & (t_act > 0.0));
+    // c_opp where F_R d > 0 (opposing: F_R > 0 for d = +1, F_R < 0 for d = -1), else c_aid.
+    D c;
+    if constexpr (W == 1) {
+        const M opposing = (d_pos & (f_r > 0.0)) | (vnot(d_pos) & (f_r < 0.0));
+        c = sel(opposing, z.c_opp, z.c_aid);
+    } else {
+        // The same choice in blends: fewer live masks (AVX-512 has 8 mask registers; K groups of
+        // masks spill to general registers) and no mask logic.
+        c = sel(d_pos, sel(f_r > 0.0, z.c_opp, z.c_aid), sel(f_r < 0.0, z.c_opp, z.c_aid));
+    }
     const D c_fr = c * vabs(f_r);
     D dyn = z.fdj + c_fr;
     D stat = z.fsj + c_fr;
@@ -204,7 +212,7 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         dyn = sel(in_gap, zero, dyn + extra_dyn);
         stat = sel(in_gap, zero, stat + extra_stat);
     }
-    const M stuck = vnot(moving) & (vabs(t_act) <= stat);
+    const M stuck = still & (vabs(t_act) <= stat);
     D t_slip = sel(d_pos, dyn, -dyn);  // d * dyn: friction while slipping (or breaking away)
     if constexpr (kFull) t_slip = t_slip + viscous;
     const D t_f = sel(stuck, t_act, t_slip);
@@ -226,8 +234,9 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         const M to_zero = stuck | (w_pos & (w_free < 0.0)) | ((moving & vnot(w_pos)) & (w_free > 0.0));
         w1 = sel(to_zero, zero, w_free);
     } else {
-        const D w_slip = sel(w_pos, sel(w_free < 0.0, zero, w_free), sel(w_free > 0.0, zero, w_free));
-        w1 = sel(moving, w_slip, sel(stuck, zero, w_free));
+        // sel(w_free < 0, 0, w_free) and sel(w_free > 0, 0, w_free): one max / min with +0 each.
+        const D w_slip = sel(w_pos, self::clamp_below(w_free, 0.0), self::clamp_above(w_free, 0.0));
+        w1 = sel(still, sel(stuck, zero, w_free), w_slip);
     }
 
     // 6. Position and end stops.
