@@ -11,3 +11,5 @@ inline double sel(bool m, double a, double b) { return m ? a : b; }
 inline bool vnot(bool m) { return !m; }
 inline double vabs(double a) { return std::fabs(a); }
 inline void to_array(double v, double* out) { out[0] = v; }
+inline double clamp_below(double a, double lo) { return a < lo ? lo : a; }
+inline double clamp_above(double a, double hi) { return a > hi ? hi : a; }

@@ -40,10 +40,13 @@ struct Lanes {
 
 template <class M>
 inline M mask_of(bool b) { return b ? vnot(M{}) : M{}; }
+/// clamp(a, lo, hi) as sel(a < lo, lo, a), then sel(a > hi, hi, a) (NaN stays NaN); the lane type
+/// gives the two halves (clamp_below, clamp_above: one max and one min on x86 SIMD targets).
+/// The bounds are 0 + lo and 0 + hi as before (-0 becomes +0: the backlash gap's bounds with no
+/// backlash).
 template <class D>
 inline D vclamp(D a, double lo, double hi) {
-    a = sel(a < lo, D{} + lo, a);
-    return sel(a > hi, D{} + hi, a);
+    return self::clamp_above(self::clamp_below(a, 0.0 + lo), 0.0 + hi);
 }
 
 /// One step with the command of step n, cmd_m = tau * radians(command_deg(t = n dt)), computed by
@@ -78,9 +81,9 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     // 1. Command: cmd_m (shared by all lanes).
     // 2. Controller.
     const D w_ref = vclamp(s.k_theta * (cmd_m - z.th), -s.w_max, s.w_max);
-    const D i_pos = vclamp(s.k_w * (w_ref - z.w), -s.i_max, s.i_max);
-    D i_ref = i_pos;
+    D i_ref = zero;  // BRK only: the other sequences compare with I_ref's clamp below without forming it
     if (s.sequence == Sequence::Brk) {
+        const D i_pos = vclamp(s.k_w * (w_ref - z.w), -s.i_max, s.i_max);
         i_ref = sel(ramping, vclamp(z.ramp_i, -s.i_max, s.i_max), i_pos);
         z.ramp_i = sel(ramping, z.ramp_i + ramp_rate, z.ramp_i);
         z.last_iref = i_ref;
@@ -184,13 +187,21 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         }
     }
     const D t_act = t_m - f_r - t_x;
-    const M moving = vnot(w0 == 0.0);
+    const M still = w0 == 0.0;
+    const M moving = vnot(still);
     const M w_pos = w0 > 0.0;
     // Direction d = +1 where d_pos, else -1: sgn(w) while moving, sgn(T_act) (-1 at 0) while stuck.
-    const M d_pos = w_pos | (vnot(moving) & (t_act > 0.0));
-    // F_R d > 0 (opposing), without the multiplication by d = +/-1.
-    const M opposing = (d_pos & (f_r > 0.0)) | (vnot(d_pos) & (f_r < 0.0));
-    const D c = sel(opposing, z.c_opp, z.c_aid);
+    const M d_pos = w_pos | (still & (t_act > 0.0));
+    // c_opp where F_R d > 0 (opposing: F_R > 0 for d = +1, F_R < 0 for d = -1), else c_aid.
+    D c;
+    if constexpr (W == 1) {
+        const M opposing = (d_pos & (f_r > 0.0)) | (vnot(d_pos) & (f_r < 0.0));
+        c = sel(opposing, z.c_opp, z.c_aid);
+    } else {
+        // The same choice in blends: fewer live masks (AVX-512 has 8 mask registers; K groups of
+        // masks spill to general registers) and no mask logic.
+        c = sel(d_pos, sel(f_r > 0.0, z.c_opp, z.c_aid), sel(f_r < 0.0, z.c_opp, z.c_aid));
+    }
     const D c_fr = c * vabs(f_r);
     D dyn = z.fdj + c_fr;
     D stat = z.fsj + c_fr;
@@ -198,7 +209,7 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         dyn = sel(in_gap, zero, dyn + extra_dyn);
         stat = sel(in_gap, zero, stat + extra_stat);
     }
-    const M stuck = vnot(moving) & (vabs(t_act) <= stat);
+    const M stuck = still & (vabs(t_act) <= stat);
     D t_slip = sel(d_pos, dyn, -dyn);  // d * dyn: friction while slipping (or breaking away)
     if constexpr (kFull) t_slip = t_slip + viscous;
     const D t_f = sel(stuck, t_act, t_slip);
@@ -220,8 +231,9 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         const M to_zero = stuck | (w_pos & (w_free < 0.0)) | ((moving & vnot(w_pos)) & (w_free > 0.0));
         w1 = sel(to_zero, zero, w_free);
     } else {
-        const D w_slip = sel(w_pos, sel(w_free < 0.0, zero, w_free), sel(w_free > 0.0, zero, w_free));
-        w1 = sel(moving, w_slip, sel(stuck, zero, w_free));
+        // sel(w_free < 0, 0, w_free) and sel(w_free > 0, 0, w_free): one max / min with +0 each.
+        const D w_slip = sel(w_pos, self::clamp_below(w_free, 0.0), self::clamp_above(w_free, 0.0));
+        w1 = sel(still, sel(stuck, zero, w_free), w_slip);
     }
 
     // 6. Position and end stops.

@@ -110,8 +110,8 @@ struct SimResult {
 [[nodiscard]] std::vector<SimResult> simulate_batch(const std::vector<SimConfig>& configs, unsigned threads = 1);
 /// The widest lane count of the batched path (AVX-512: 8 doubles); simd_target().lanes is the one in use.
 inline constexpr int kBatchLanes = 8;
-/// Independent lane groups stepped together to hide the step's latency (lanes * kBatchGroups per batch).
-inline constexpr int kBatchGroups = 3;
+/// The most lane groups a target steps together (AVX2, AVX-512: 4); simd_target().groups is the one in use.
+inline constexpr int kBatchGroups = 4;
 
 /// The instruction set simulate_batch runs on: one binary built for baseline x86-64 picks the
 /// widest the CPU has at run time (Google Highway dynamic dispatch).
