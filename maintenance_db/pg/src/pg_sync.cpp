@@ -457,13 +457,13 @@ private:
             // (byte order, as COLLATE "C"), then by that order: the server's summary statement sorts them so,
             // and finds them already sorted (pg_schema/003).
             struct Term {
-                const std::string *tail, *position, *serial, *parameter;
+                const std::string *tail, *position, *serial;
+                std::string parameter;  // session_measurements' values do not outlive emit
                 std::int64_t session_id;
                 int ordinal;
                 std::string line;
             };
             std::vector<Term> terms;
-            std::vector<std::string> parameters;
             std::deque<LightSession> amended;  // sessions of earlier batches that this one amends (a deque: stable addresses)
             static const std::string kNoPosition;
             for (const auto id : ids) {
@@ -480,8 +480,7 @@ private:
                                            '\t' + f(m.parameter) + '\t' + d2s(days) + '\t' + d2s(w) + '\t' + d2s(w * m.value) + '\t' +
                                            d2s(w * m.value * m.value) + '\t' + (s.cycles ? d2s(static_cast<double>(*s.cycles)) : std::string("\\N")) +
                                            '\t' + d2s(m.value) + '\t' + d2s(m.std_error) + '\t' + f(m.limit_kind) + '\t' + opt_d(m.limit_value) + '\n';
-                        terms.push_back({&s.tail, s.position ? &*s.position : &kNoPosition, &s.serial, nullptr, sid, ord, std::move(line)});
-                        parameters.push_back(m.parameter);
+                        terms.push_back({&s.tail, s.position ? &*s.position : &kNoPosition, &s.serial, m.parameter, sid, ord, std::move(line)});
                     }
                 };
                 if (l.amends) {
@@ -495,10 +494,9 @@ private:
                 }
                 emit(l, +1);
             }
-            for (std::size_t i = 0; i < terms.size(); ++i) terms[i].parameter = &parameters[i];
             std::sort(terms.begin(), terms.end(), [](const Term& a, const Term& b) {
-                return std::tie(*a.tail, *a.position, *a.serial, *a.parameter, a.session_id, a.ordinal) <
-                       std::tie(*b.tail, *b.position, *b.serial, *b.parameter, b.session_id, b.ordinal);
+                return std::tie(*a.tail, *a.position, *a.serial, a.parameter, a.session_id, a.ordinal) <
+                       std::tie(*b.tail, *b.position, *b.serial, b.parameter, b.session_id, b.ordinal);
             });
             pg_.copy_in("session_measurements (session_id, ordinal, sign, of_session_id, tail_number, position, actuator_serial, parameter, days, "
                         "w, wy, wyy, cycles, value, std_error, limit_kind, limit_value)",
