@@ -36,10 +36,10 @@ double mse(const NetworkView& n, const double* x_data, const double* t_data, lon
         a1 = Eigen::Map<const Eigen::MatrixXd>(a1_data, n.hidden, cols);
         z2 = Eigen::Map<const Eigen::MatrixXd>(z2_data, n.outputs, cols);
     } else {
-        a1 = w1 * x;
+        a1.noalias() = w1 * x;  // into a1 directly, as the construction from the product did
         a1.colwise() += b1;
         a1 = a1.array().tanh();
-        z2 = w2 * a1;
+        z2.noalias() = w2 * a1;
         z2.colwise() += b2;
         if (keep) {
             Eigen::Map<Eigen::MatrixXd>(a1_data, n.hidden, cols) = a1;
