@@ -1,7 +1,8 @@
 // Which instruction set the batched path runs on (simulator.hpp: simd_target, set_simd_target).
 // Highway picks the widest target the CPU has; a narrower one is forced by disabling every better
 // target (hwy::DisableTargets, which the next HWY_DYNAMIC_DISPATCH honours). "scalar" bypasses
-// Highway and runs the batch one simulation at a time on the scalar path.
+// Highway for the step and runs the batch one simulation at a time on the scalar path; the kernels
+// that still dispatch (term_sincos_many) get Highway's baseline target.
 #include "simd_target.hpp"
 
 #include "batch_kernels.hpp"
@@ -58,6 +59,9 @@ std::string supported_list() {
 void apply(const std::string& name, const char* source) {
     const std::string v = lower(name);
     if (v == "scalar") {
+        // The step runs on the baseline copy (simulate, simulate_batch); what still dispatches through
+        // Highway (term_sincos_kernels.cpp) gets its baseline copy too: no target can be disabled below it.
+        hwy::DisableTargets(~std::int64_t{0});
         g_scalar = true;
         return;
     }

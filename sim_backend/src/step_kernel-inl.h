@@ -122,8 +122,10 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     if (s.load_case == LoadCase::B) {
         const D alpha_t = z.x[1] + z.x[3] * (detail::kTailArmM / detail::kAirspeedMS);
         const D delta_rad = th_load * s.inv_tau;
-        h = -(detail::kQbarPa * detail::kSeM2 * detail::kCeM *
-              (detail::kChAlphaPerRad * alpha_t + detail::kChDeltaPerRad * delta_rad));
+        // -(K x) written as (-K) x: the same double (rounding is symmetric in the sign), one sign flip
+        // fewer on the step's critical path (theta -> F_R -> friction -> w -> theta).
+        constexpr double kNegHingeGain = -(detail::kQbarPa * detail::kSeM2 * detail::kCeM);
+        h = kNegHingeGain * (detail::kChAlphaPerRad * alpha_t + detail::kChDeltaPerRad * delta_rad);
     } else if (s.load_case == LoadCase::AExt) {
         h = zero + (detail::kCaseAHingeNm + detail::kAExtHingeRateNmPerS * t);
     } else {
@@ -239,7 +241,13 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     // 6. Position and end stops.
     D th1 = z.th + dt * w1;
     const M at_stop = vabs(th1) > s.stop_m;
-    th1 = vclamp(th1, -s.stop_m, s.stop_m);
+    if constexpr (W == 1) {
+        // Within the stops the clamp gives theta back unchanged (NaN too): the scalar step branches
+        // around it (rarely taken), so its max and min leave the step's critical path.
+        if (at_stop) [[unlikely]] th1 = vclamp(th1, -s.stop_m, s.stop_m);
+    } else {
+        th1 = vclamp(th1, -s.stop_m, s.stop_m);
+    }
     const D w_before_stop = w1;
     w1 = sel(at_stop, zero, w1);
     if constexpr (kFull) {

@@ -8,7 +8,7 @@
 // rounds always taken: error below 1 ulp (the C library's results within 1 ulp), and no branch but
 // the quadrant's selection, so a loop over many arguments runs them side by side. Plain IEEE
 // operations (the library builds with -ffp-contract=off): the same result on every machine, for
-// one argument (terms.cpp) or many (term_hook.cpp). Beyond kTrigMediumMax and for non-finite
+// one argument (terms.cpp) or many (term_sincos_kernels.cpp). Beyond kTrigMediumMax and for non-finite
 // arguments std::sin/std::cos are used (no term comes near: angles in degrees or radians, seconds,
 // rad/s over periods of a fraction of their range).
 #include "emadiag/sim/terms.hpp"
@@ -81,7 +81,8 @@ inline void term_sincos(double x, double& s, double& c) {
     }
 }
 
-/// term_sincos for x[0..n): the same values, side by side in SIMD registers (term_hook.cpp).
+/// term_sincos for x[0..n): the same values, side by side in SIMD registers of the instruction set
+/// the simulator uses (term_sincos_kernels.cpp: Highway's dynamic dispatch, EMADIAG_SIMD narrows it).
 void term_sincos_many(const double* x, double* s, double* c, int n);
 
 /// The argument of sin/cos(signal, period) for the signal's value v.

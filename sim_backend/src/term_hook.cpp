@@ -24,30 +24,6 @@ TermInputs lane_inputs(double w, double theta_m, double theta_u_rad, double f_r,
 
 }  // namespace
 
-// One copy per instruction set, chosen at load time (the library's baseline is plain x86-64): the
-// loop is branch-free and runs 2, 4 or 8 arguments to a register, each with the same IEEE operations
-// in the same order (no FMA: -ffp-contract=off), so every copy gives term_sincos's values bit for bit.
-// Not in sanitizer builds: the clones' ifunc resolver runs while the dynamic loader relocates the
-// program, before the sanitizer's runtime is set up, and its instrumented code crashed every
-// ThreadSanitizer test binary at start (SIGSEGV in term_sincos_many's resolver). Those builds get
-// the baseline copy, which gives the same bits.
-#if defined(__SANITIZE_THREAD__) || defined(__SANITIZE_ADDRESS__)
-#define EMADIAG_TERM_CLONES
-#elif defined(__has_feature)
-#if __has_feature(thread_sanitizer) || __has_feature(address_sanitizer) || __has_feature(memory_sanitizer)
-#define EMADIAG_TERM_CLONES
-#endif
-#endif
-#ifndef EMADIAG_TERM_CLONES
-#define EMADIAG_TERM_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
-#endif
-EMADIAG_TERM_CLONES void term_sincos_many(const double* x, double* s, double* c, int n) {
-    for (int k = 0; k < n; ++k) term_sincos_medium(x[k], s[k], c[k]);
-    for (int k = 0; k < n; ++k) {
-        if (!(std::fabs(x[k]) <= kTrigMediumMax)) term_sincos(x[k], s[k], c[k]);
-    }
-}
-
 bool has_torque_terms(const std::vector<Term>& terms) {
     for (const auto& t : terms) {
         if (t.target == TermTarget::Torque) return true;

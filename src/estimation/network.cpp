@@ -269,7 +269,7 @@ Eigen::MatrixXd Network::forward(const Eigen::MatrixXd& x) const {
     return y;
 }
 
-double Network::mse(const Eigen::MatrixXd& x, const Eigen::MatrixXd& t, Eigen::VectorXd* grad) const {
+double Network::mse(const Eigen::MatrixXd& x, const Eigen::MatrixXd& t, Eigen::VectorXd* grad, MseCache* cache) const {
     if (x.rows() != inputs() || t.rows() != outputs() || x.cols() != t.cols() || x.cols() == 0) {
         throw EmadiagError("mse: inputs " + std::to_string(x.rows()) + "x" + std::to_string(x.cols()) + " and targets " +
                            std::to_string(t.rows()) + "x" + std::to_string(t.cols()) + " do not fit a " +
@@ -283,9 +283,31 @@ double Network::mse(const Eigen::MatrixXd& x, const Eigen::MatrixXd& t, Eigen::V
     }
     const nn_kernels::NetworkView n = view_of(w1_, b1_, w2_, b2_);
     const std::string v = nn_kernels::variant();
-    if (v == "avx512") return nn_kernels::avx512::mse(n, x.data(), t.data(), x.cols(), g);
-    if (v == "avx2") return nn_kernels::avx2::mse(n, x.data(), t.data(), x.cols(), g);
-    return nn_kernels::baseline::mse(n, x.data(), t.data(), x.cols(), g);
+    double* a1 = nullptr;
+    double* z2 = nullptr;
+    bool have_forward = false;
+    if (cache != nullptr) {
+        const Eigen::VectorXd w = flatten();
+        have_forward = cache->valid && cache->x == x.data() && cache->cols == x.cols() && cache->variant == v &&
+                       cache->weights.size() == static_cast<std::size_t>(w.size()) &&
+                       std::equal(cache->weights.begin(), cache->weights.end(), w.data());
+        if (!have_forward) {
+            cache->weights.assign(w.data(), w.data() + w.size());
+            cache->a1.resize(static_cast<std::size_t>(hidden()) * static_cast<std::size_t>(x.cols()));
+            cache->z2.resize(static_cast<std::size_t>(outputs()) * static_cast<std::size_t>(x.cols()));
+            cache->x = x.data();
+            cache->cols = x.cols();
+            cache->variant = v;
+        } else {
+            ++cache->hits;
+        }
+        cache->valid = true;
+        a1 = cache->a1.data();
+        z2 = cache->z2.data();
+    }
+    if (v == "avx512") return nn_kernels::avx512::mse(n, x.data(), t.data(), x.cols(), g, a1, z2, have_forward);
+    if (v == "avx2") return nn_kernels::avx2::mse(n, x.data(), t.data(), x.cols(), g, a1, z2, have_forward);
+    return nn_kernels::baseline::mse(n, x.data(), t.data(), x.cols(), g, a1, z2, have_forward);
 }
 
 nlohmann::json Network::to_json() const {

@@ -67,6 +67,19 @@ struct InputNormalisation {
     static InputNormalisation from_json(const nlohmann::json& j, const std::string& where);
 };
 
+/// The activations of a network's last forward pass on one input matrix, kept by a caller that
+/// evaluates the error at a point and then its gradient at the same point (SCG: Network::mse).
+/// Valid only for the weights, inputs and kernel variant it was filled with (Network::mse checks).
+struct MseCache {
+    std::vector<double> weights;  ///< flatten() of the network that filled it
+    std::vector<double> a1, z2;   ///< hidden (hidden x cols) and output (outputs x cols) activations
+    const double* x = nullptr;    ///< the inputs' data (the same matrix, unchanged, for a hit)
+    Eigen::Index cols = 0;
+    std::string variant;
+    bool valid = false;
+    long hits = 0;  ///< forward passes saved
+};
+
 /// Two-layer feed-forward network, tansig hidden layer and satlins output, on columns of inputs.
 class Network {
 public:
@@ -91,7 +104,11 @@ public:
 
     /// Mean squared error over all outputs and columns (internal space) against targets t, and,
     /// when grad is not null, its gradient with respect to flatten().
-    [[nodiscard]] double mse(const Eigen::MatrixXd& x, const Eigen::MatrixXd& t, Eigen::VectorXd* grad = nullptr) const;
+    /// With a cache: the forward pass is taken from it when it holds this network's weights and these
+    /// inputs (x must not have changed since), else computed and stored in it. The same result bit
+    /// for bit either way.
+    [[nodiscard]] double mse(const Eigen::MatrixXd& x, const Eigen::MatrixXd& t, Eigen::VectorXd* grad = nullptr,
+                             MseCache* cache = nullptr) const;
 
     [[nodiscard]] nlohmann::json to_json() const;
     static Network from_json(const nlohmann::json& j, const std::string& where);

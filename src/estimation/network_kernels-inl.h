@@ -25,15 +25,27 @@ void forward(const NetworkView& n, const double* x_data, long cols, double* y) {
     Eigen::Map<Eigen::MatrixXd>(y, n.outputs, cols) = z2.cwiseMax(-1.0).cwiseMin(1.0);  // satlins
 }
 
-double mse(const NetworkView& n, const double* x_data, const double* t_data, long cols, double* grad_data) {
+double mse(const NetworkView& n, const double* x_data, const double* t_data, long cols, double* grad_data,
+           double* a1_data, double* z2_data, bool have_forward) {
     const MatMap w1(n.w1, n.hidden, n.inputs), w2(n.w2, n.outputs, n.hidden);
     const VecMap b1(n.b1, n.hidden), b2(n.b2, n.outputs);
     const MatMap x(x_data, n.inputs, cols), t(t_data, n.outputs, cols);
-    Eigen::MatrixXd a1 = w1 * x;
-    a1.colwise() += b1;
-    a1 = a1.array().tanh();
-    Eigen::MatrixXd z2 = w2 * a1;
-    z2.colwise() += b2;
+    const bool keep = a1_data != nullptr && z2_data != nullptr;
+    Eigen::MatrixXd a1, z2;
+    if (keep && have_forward) {  // the activations of this very forward pass, kept by the caller
+        a1 = Eigen::Map<const Eigen::MatrixXd>(a1_data, n.hidden, cols);
+        z2 = Eigen::Map<const Eigen::MatrixXd>(z2_data, n.outputs, cols);
+    } else {
+        a1.noalias() = w1 * x;  // into a1 directly, as the construction from the product did
+        a1.colwise() += b1;
+        a1 = a1.array().tanh();
+        z2.noalias() = w2 * a1;
+        z2.colwise() += b2;
+        if (keep) {
+            Eigen::Map<Eigen::MatrixXd>(a1_data, n.hidden, cols) = a1;
+            Eigen::Map<Eigen::MatrixXd>(z2_data, n.outputs, cols) = z2;
+        }
+    }
     const Eigen::MatrixXd y = z2.cwiseMax(-1.0).cwiseMin(1.0);
     const Eigen::MatrixXd e = y - t;
     const double count = static_cast<double>(e.size());

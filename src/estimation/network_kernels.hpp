@@ -25,7 +25,11 @@ struct NetworkView {
     /* y (outputs x cols) = satlins(w2 tansig(w1 x + b1) + b2) for x (inputs x cols). */                    \
     void forward(const NetworkView& n, const double* x, long cols, double* y);                             \
     /* Mean squared error against t (outputs x cols); its gradient into grad (parameter count) if set. */  \
-    double mse(const NetworkView& n, const double* x, const double* t, long cols, double* grad);
+    /* a1 (hidden x cols) and z2 (outputs x cols), if set, hold the forward pass's activations: read */    \
+    /* from them when have_forward (the same weights and inputs as when they were written), else */       \
+    /* written to them. */                                                                                  \
+    double mse(const NetworkView& n, const double* x, const double* t, long cols, double* grad, double* a1,   \
+               double* z2, bool have_forward);
 namespace baseline { EMADIAG_NN_KERNEL_DECLS }
 namespace avx2 { EMADIAG_NN_KERNEL_DECLS }
 namespace avx512 { EMADIAG_NN_KERNEL_DECLS }

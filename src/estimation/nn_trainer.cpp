@@ -104,9 +104,13 @@ TrainReport train_network(const FeatureSet& features, const TrainOptions& option
     // MSE in [0, 1] space = internal MSE / 4 (u = (y + 1) / 2).
     constexpr double kToUnitSpace = 0.25;
     Network work = net;
+    // SCG evaluates the error at a trial point and, when the step succeeds, its gradient at that same
+    // point: the cache gives that second call the first one's forward pass (about a quarter of an
+    // epoch's work), bit for bit.
+    MseCache cache;
     const ScgObjective objective = [&](const Eigen::VectorXd& w, Eigen::VectorXd* grad) {
         work.unflatten(w);
-        const double perf = work.mse(x_train, t_train, grad);
+        const double perf = work.mse(x_train, t_train, grad, &cache);
         if (grad != nullptr) *grad *= kToUnitSpace;
         return perf * kToUnitSpace;
     };

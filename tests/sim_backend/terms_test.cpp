@@ -4,10 +4,14 @@
 #include "emadiag/sim/simulator.hpp"
 #include "emadiag/sim/terms.hpp"
 
+#include "../../sim_backend/src/term_eval.hpp"
+
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <numbers>
 #include <random>
 
@@ -20,6 +24,18 @@ SimConfig case_b_dyn() {
     c.sequence = Sequence::Dyn;
     return c;
 }
+
+/// Restores the SIMD target (the widest, or EMADIAG_SIMD) when a test ends.
+class SimdTargetGuard {
+public:
+    SimdTargetGuard() : saved_(simd_target().name) {}
+    ~SimdTargetGuard() { set_simd_target(saved_); }
+    SimdTargetGuard(const SimdTargetGuard&) = delete;
+    SimdTargetGuard& operator=(const SimdTargetGuard&) = delete;
+
+private:
+    std::string saved_;
+};
 
 double max_speed_difference(const SimResult& a, const SimResult& b) {
     double d = 0;
@@ -184,9 +200,62 @@ TEST(Terms, BatchRunsManyPeriodicTermsWithTheScalarPathsResults) {
             cs[i].params.fdj_nm = 0.06 + 0.005 * static_cast<double>(i);
         }
         cs[4].params.terms.clear();  // a lane without terms between lanes with them
-        const auto rs = simulate_batch(cs, 1);
-        for (std::size_t i = 0; i < cs.size(); i += 2) {
-            EXPECT_EQ(max_speed_difference(rs[i], simulate(cs[i])), 0.0) << "lane " << i << ", copies " << copies;
+        // On every instruction set the CPU has (the periodic factors' sin and cos are dispatched
+        // with the step), against the scalar path of the baseline build.
+        const SimdTargetGuard guard;
+        set_simd_target("scalar");
+        std::vector<SimResult> scalar;
+        for (std::size_t i = 0; i < cs.size(); i += 2) scalar.push_back(simulate(cs[i]));
+        for (const std::string& target : supported_simd_targets()) {
+            set_simd_target(target);
+            const auto rs = simulate_batch(cs, 1);
+            for (std::size_t i = 0; i < cs.size(); i += 2) {
+                EXPECT_EQ(max_speed_difference(rs[i], scalar[i / 2]), 0.0)
+                    << "lane " << i << ", copies " << copies << ", target " << target;
+            }
+        }
+    }
+}
+
+// term_sincos_many (Highway, one copy per instruction set) gives term_sincos's bits for every
+// argument, on every target the CPU has: random arguments over the signals' range and beyond the
+// medium range (the C library's there), signed zeros, subnormals, infinities, NaN, neighbours of
+// multiples of pi/2, and every count from 1 to 19 (whole vectors and a partial last one).
+TEST(Terms, SinCosOfManyArgumentsGivesTermSinCosBitsOnEverySupportedTarget) {
+    constexpr std::uint64_t kSeed = 20261126;
+    std::printf("seed %llu\n", static_cast<unsigned long long>(kSeed));
+    std::mt19937_64 g(kSeed);
+    std::vector<double> x = {0.0, -0.0, 4.9e-324, -4.9e-324, 2.2250738585072014e-308, 1e-300, 1.0, -1.0,
+                             detail::kTrigMediumMax, -detail::kTrigMediumMax, std::nextafter(detail::kTrigMediumMax, INFINITY),
+                             1e7, -3e9, 1e300, std::numeric_limits<double>::max(), INFINITY, -INFINITY,
+                             std::numeric_limits<double>::quiet_NaN()};
+    for (int k = -400; k <= 400; ++k) {
+        const double m = k * (std::numbers::pi / 2.0);
+        x.insert(x.end(), {m, std::nextafter(m, INFINITY), std::nextafter(m, -INFINITY)});
+    }
+    for (const double range : {0.5, 10.0, 1e4, 1.5e6, 1e8}) {
+        std::uniform_real_distribution<double> u(-range, range);
+        for (int k = 0; k < 4000; ++k) x.push_back(u(g));
+    }
+    std::vector<double> want_s(x.size()), want_c(x.size());
+    for (std::size_t k = 0; k < x.size(); ++k) detail::term_sincos(x[k], want_s[k], want_c[k]);
+    const auto bits = [](double v) { return std::bit_cast<std::uint64_t>(v); };
+    const SimdTargetGuard guard;
+    for (const std::string& target : supported_simd_targets()) {
+        set_simd_target(target);
+        std::vector<double> s(x.size()), c(x.size());
+        detail::term_sincos_many(x.data(), s.data(), c.data(), static_cast<int>(x.size()));
+        for (std::size_t k = 0; k < x.size(); ++k) {
+            ASSERT_EQ(bits(s[k]), bits(want_s[k])) << "sin(" << x[k] << ") on " << target << " (seed " << kSeed << ")";
+            ASSERT_EQ(bits(c[k]), bits(want_c[k])) << "cos(" << x[k] << ") on " << target << " (seed " << kSeed << ")";
+        }
+        for (int n = 1; n <= 19; ++n) {  // counts that end in a partial vector; the rest left untouched
+            std::vector<double> sn(20, 7.0), cn(20, 7.0);
+            detail::term_sincos_many(x.data() + 1000, sn.data(), cn.data(), n);
+            for (int k = 0; k < 20; ++k) {
+                EXPECT_EQ(bits(sn[k]), bits(k < n ? want_s[1000 + k] : 7.0)) << "n " << n << " k " << k << " on " << target;
+                EXPECT_EQ(bits(cn[k]), bits(k < n ? want_c[1000 + k] : 7.0)) << "n " << n << " k " << k << " on " << target;
+            }
         }
     }
 }

@@ -66,6 +66,40 @@ TEST(NetworkTest, FlattenUnflattenAndJsonRoundTrip) {
                 ThrowsMessage<std::runtime_error>(HasSubstr("weight vector has 3 values, the network 23")));
 }
 
+// Network::mse with an MseCache (SCG's error at a trial point, then its gradient there): the cached
+// forward pass gives the uncached result bit for bit, and is used only for the same weights and inputs.
+TEST(NetworkTest, MseWithACachedForwardPassIsBitForBitTheUncachedOne) {
+    Network net(7, 5, 2);
+    net.initialise(11);
+    Eigen::MatrixXd x(7, 9), t(2, 9), x2(7, 9);
+    for (Eigen::Index j = 0; j < x.cols(); ++j) {
+        for (Eigen::Index i = 0; i < x.rows(); ++i) {
+            x(i, j) = std::sin(0.7 * static_cast<double>(i) + 1.3 * static_cast<double>(j));
+            x2(i, j) = x(i, j) * 0.5;
+        }
+        t(0, j) = 0.3 * std::cos(static_cast<double>(j));
+        t(1, j) = -0.2;
+    }
+    Eigen::VectorXd want_grad, grad;
+    const double want = net.mse(x, t, &want_grad);
+    MseCache cache;
+    EXPECT_EQ(net.mse(x, t, nullptr, &cache), want);  // fills the cache
+    EXPECT_EQ(cache.hits, 0);
+    EXPECT_EQ(net.mse(x, t, &grad, &cache), want);  // the same point: its forward pass from the cache
+    EXPECT_EQ(cache.hits, 1);
+    EXPECT_EQ(grad, want_grad);
+    // Other inputs, or other weights: computed afresh.
+    EXPECT_EQ(net.mse(x2, t, &grad, &cache), net.mse(x2, t));
+    EXPECT_EQ(cache.hits, 1);
+    Eigen::VectorXd w = net.flatten();
+    w[3] += 1e-3;
+    net.unflatten(w);
+    const double moved = net.mse(x2, t, &want_grad);
+    EXPECT_EQ(net.mse(x2, t, &grad, &cache), moved);
+    EXPECT_EQ(grad, want_grad);
+    EXPECT_EQ(cache.hits, 1);
+}
+
 TEST(NetworkTest, InitialisationIsSeeded) {
     Network a(5, 4, 1), b(5, 4, 1), c(5, 4, 1);
     a.initialise(3);
