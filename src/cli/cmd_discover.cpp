@@ -115,8 +115,9 @@ void print_text(std::ostream& os, const std::string& path, const discovery::Disc
         }
         os << "  " << ls.verdict << '\n';
         if (ls.added) {
-            os << "  added stribeck (" << "Stribeck friction, found by the trajectory" << "); re-simulation fit on the trajectory ("
-               << ls.simulations << " simulations):";
+            os << "  " << (ls.refit_of_torque ? "stribeck re-estimated on the trajectory (replaces the torque fit)"
+                                              : "added stribeck (Stribeck friction, found by the trajectory)")
+               << "; profile over w_s and re-simulation fit on the trajectory (" << ls.simulations << " simulations):";
             for (const auto& f : ls.fitted) os << ' ' << f.name << '=' << fmt(f.value, 5) << " +/- " << fmt(f.std_error, 2);
             os << '\n';
         }

@@ -318,8 +318,15 @@ constexpr double kLowSpeedProbeNm = 0.02;
 constexpr double kLowSpeedMinExplained = 0.8;
 /// The linearised screen's share of that excess below which the fits are not tried.
 constexpr double kLowSpeedScreenMinExplained = 0.5;
-/// Scanned speeds re-simulated at their own amplitude to choose the start of the fit (one batch).
+/// Scanned speeds re-simulated at their own amplitude to choose the start of the fit (one batch), and
+/// the refinement of the scan around the best of them (kLowSpeedFineSteps per scan step, +/- one step).
 constexpr std::size_t kLowSpeedProfilePoints = 8;
+constexpr int kLowSpeedFineSteps = 4;
+/// A re-estimate of a Stribeck friction the torque rounds found may raise the chi-square of the torque
+/// window means (against their floor) by at most this (a 95 % change for one parameter is 3.84).
+constexpr double kLowSpeedMaxTorqueChi2Rise = 4.0;
+/// Profile points within this many scan steps of the best enter the estimate of w_s and its error.
+constexpr double kLowSpeedProfileSpan = 1.5;
 
 struct LowSpeedResult {
     LowSpeedStage stage;
@@ -429,49 +436,161 @@ LowSpeedResult low_speed_stage(const Run& run, const RunSignals& s, const NoiseF
     }
     st.screen_passes = true;
     // The trajectory sees mainly the impulse, amplitude x w_s: a long, curved valley over w_s on which
-    // the re-simulated cost is rough (the simulator's current chatter), so a Levenberg-Marquardt fit
-    // from the linearised best stops where it starts. The start is chosen on the profile instead: the
-    // best speeds re-simulated at their own amplitude, each corrected by one linear step in the health
-    // and the amplitude, in one batch.
-    std::vector<sim::EmaParams> profile_params;
-    std::vector<std::size_t> profile_grid;  // index into grid of each profile point
+    // the re-simulated cost is rough at small steps (the simulator's current chatter), so a
+    // Levenberg-Marquardt fit from the linearised best stops where it starts, with standard errors that
+    // do not cover the truth. The start is chosen on the profile over w_s instead, in two batches: the
+    // best scanned speeds re-simulated at their own amplitude, then a grid four times finer around the
+    // best of them at the same impulse; each point corrected by one linear step in the model's
+    // parameters and the amplitude; a parabola through the best three in ln w_s gives the start.
+    struct ProfilePoint {
+        double w_s = 0, amplitude = 0;
+        std::size_t column = 0;  ///< the scanned speed whose column linearises the point
+        sim::EmaParams params;
+        double rss = std::numeric_limits<double>::infinity();
+        Eigen::VectorXd beta;
+    };
+    auto nearest_column = [&](double w) {
+        std::size_t best_i = 0;
+        for (std::size_t i = 1; i < grid.size(); ++i) {
+            if (std::abs(std::log(grid[i].shape1 / w)) < std::abs(std::log(grid[best_i].shape1 / w))) best_i = i;
+        }
+        return best_i;
+    };
+    auto evaluate_profile = [&](std::vector<ProfilePoint>& pts) {
+        std::vector<sim::EmaParams> params;
+        for (auto& pt : pts) {
+            pt.params = p;
+            set_parameter(pt.params, "stribeck_amplitude", pt.amplitude);
+            set_parameter(pt.params, "stribeck_speed", pt.w_s);
+            pt.params.fsj_nm = std::max(fsj_base_nm, pt.params.fdj_nm);
+            params.push_back(pt.params);
+        }
+        const std::vector<Run> prs = resimulate_many(run, params);
+        st.simulations += static_cast<int>(prs.size());
+        for (std::size_t i = 0; i < pts.size(); ++i) {
+            const std::vector<double> r = trajectory_rows(s, run_signals(prs[i]), floor);
+            const Eigen::Map<const Eigen::VectorXd> ri(r.data(), n_rows);
+            Eigen::MatrixXd a(n_rows, nh + 1);
+            a.leftCols(nh) = hcols;
+            a.col(nh) = column(health_names.size() + pts[i].column);
+            pts[i].beta = a.colPivHouseholderQr().solve(ri);
+            pts[i].rss = (ri - a * pts[i].beta).squaredNorm();
+        }
+    };
+    std::vector<ProfilePoint> coarse;
     for (const auto& ev : st.ranking) {
-        if (profile_params.size() >= kLowSpeedProfilePoints || !ev.sign_ok) break;
-        sim::EmaParams q2 = p;
-        set_parameter(q2, "stribeck_amplitude", ev.amplitude_nm);
-        set_parameter(q2, "stribeck_speed", ev.stribeck_speed_rad_s);
-        q2.fsj_nm = std::max(fsj_base_nm, q2.fdj_nm);
-        profile_params.push_back(q2);
-        for (std::size_t i = 0; i < grid.size(); ++i) {
-            if (grid[i].shape1 == ev.stribeck_speed_rad_s) profile_grid.push_back(i);
+        if (coarse.size() >= kLowSpeedProfilePoints || !ev.sign_ok) break;
+        ProfilePoint pt;
+        pt.w_s = ev.stribeck_speed_rad_s;
+        pt.amplitude = ev.amplitude_nm;
+        pt.column = nearest_column(pt.w_s);
+        coarse.push_back(pt);
+    }
+    evaluate_profile(coarse);
+    const ProfilePoint c_best = *std::min_element(coarse.begin(), coarse.end(), [](const ProfilePoint& x, const ProfilePoint& y) {
+        return x.rss < y.rss;
+    });
+    const double grid_ratio = grid.size() >= 2 ? grid[1].shape1 / grid[0].shape1 : 1.25;
+    const double fine_ratio = std::pow(grid_ratio, 1.0 / kLowSpeedFineSteps);
+    const double impulse = (c_best.amplitude + c_best.beta(nh)) * c_best.w_s;
+    std::vector<ProfilePoint> fine;
+    for (int k = -kLowSpeedFineSteps + 1; k < kLowSpeedFineSteps; ++k) {
+        ProfilePoint pt;
+        pt.w_s = c_best.w_s * std::pow(fine_ratio, k);
+        pt.amplitude = std::max(impulse / pt.w_s, kLowSpeedProbeNm * 0.01);
+        pt.column = nearest_column(pt.w_s);
+        fine.push_back(pt);
+    }
+    evaluate_profile(fine);
+    for (const auto* set : {&coarse, &fine}) {
+        for (const auto& pt : *set) st.profile.push_back({pt.w_s, pt.amplitude + pt.beta(nh), pt.rss / dn});
+    }
+    std::sort(st.profile.begin(), st.profile.end());
+    // The estimate and its uncertainty from the profile, not from a local Jacobian: x = ln w_s, a
+    // quadratic in x least-squares fitted to the profile points within kLowSpeedProfileSpan scan steps
+    // of the best; its vertex is the estimate; the variance of the vertex from the scatter of the
+    // points about the quadratic (the simulator's chatter makes the cost rough from point to point)
+    // plus the sensor noise's share 1 / (N c) (a change of 1 in chi-square). The amplitude follows
+    // the valley: ln A linear in x over the same points, at the vertex.
+    const ProfilePoint* f_best = &fine[0];
+    for (const auto& pt : fine) {
+        if (pt.rss < f_best->rss) f_best = &pt;
+    }
+    std::vector<const ProfilePoint*> near;
+    for (const auto* set : {&coarse, &fine}) {
+        for (const auto& pt : *set) {
+            if (std::abs(std::log(pt.w_s / f_best->w_s)) <= kLowSpeedProfileSpan * std::log(grid_ratio) + 1e-9 &&
+                pt.amplitude + pt.beta(nh) > 0) {
+                near.push_back(&pt);
+            }
         }
     }
-    const std::vector<Run> profile_runs = resimulate_many(run, profile_params);
-    st.simulations += static_cast<int>(profile_runs.size());
-    std::size_t best_profile = 0;
-    double best_profile_rss = std::numeric_limits<double>::infinity();
-    for (std::size_t i = 0; i < profile_runs.size(); ++i) {
-        const std::vector<double> r = trajectory_rows(s, run_signals(profile_runs[i]), floor);
-        const Eigen::Map<const Eigen::VectorXd> ri(r.data(), n_rows);
-        Eigen::MatrixXd a(n_rows, nh + 1);
-        a.leftCols(nh) = hcols;
-        a.col(nh) = column(health_names.size() + profile_grid[i]);
-        const Eigen::VectorXd beta = a.colPivHouseholderQr().solve(ri);
-        const double rss = (ri - a * beta).squaredNorm();
-        if (rss < best_profile_rss) {
-            best_profile_rss = rss;
-            best_profile = i;
+    const double x0 = std::log(f_best->w_s);
+    double x_hat = 0, x_se = 0, ln_a_hat = std::log(f_best->amplitude + f_best->beta(nh)), ln_a_se = 0;
+    {
+        const auto np = static_cast<Eigen::Index>(near.size());
+        Eigen::MatrixXd xq(np, 3);
+        Eigen::VectorXd yc(np), ya(np);
+        double x_min = 0, x_max = 0;
+        for (Eigen::Index i = 0; i < np; ++i) {
+            const double x = std::log(near[static_cast<std::size_t>(i)]->w_s) - x0;
+            xq(i, 0) = 1.0;
+            xq(i, 1) = x;
+            xq(i, 2) = x * x;
+            yc(i) = near[static_cast<std::size_t>(i)]->rss / dn;
+            ya(i) = std::log(near[static_cast<std::size_t>(i)]->amplitude + near[static_cast<std::size_t>(i)]->beta(nh));
+            x_min = std::min(x_min, x);
+            x_max = std::max(x_max, x);
         }
+        const Eigen::VectorXd cq = xq.colPivHouseholderQr().solve(yc);
+        // The scatter's variance is estimated from a few points: scaled by (t / z)^2 at 95 % for its
+        // degrees of freedom (Cornish-Fisher expansion of Student's t), so the interval keeps its cover.
+        const double dof_q = static_cast<double>(std::max<Eigen::Index>(1, np - 3));
+        constexpr double kZ95 = 1.959964;
+        const double t95 = kZ95 + (std::pow(kZ95, 3) + kZ95) / (4.0 * dof_q) +
+                           (5.0 * std::pow(kZ95, 5) + 16.0 * std::pow(kZ95, 3) + 3.0 * kZ95) / (96.0 * dof_q * dof_q);
+        const Eigen::VectorXd rq = yc - xq * cq;
+        const double scatter2 = np > 3 ? rq.squaredNorm() / dof_q * (t95 / kZ95) * (t95 / kZ95) : 0.0;
+        const Eigen::Matrix3d cov = scatter2 * (xq.transpose() * xq).inverse();
+        if (cq(2) > 0 && np > 3) {
+            x_hat = std::clamp(-cq(1) / (2.0 * cq(2)), x_min, x_max);
+            const Eigen::Vector3d g(0.0, -1.0 / (2.0 * cq(2)), cq(1) / (2.0 * cq(2) * cq(2)));
+            x_se = std::sqrt(std::max(0.0, g.dot(cov * g)) + 1.0 / (dn * cq(2)));
+        }
+        // No curvature, or a vertex at the edge: w_s is known only to within the span of the points.
+        if (!(cq(2) > 0) || np <= 3 || x_hat <= x_min || x_hat >= x_max) {
+            x_hat = std::clamp(x_hat, x_min, x_max);
+            x_se = std::max(x_se, 0.5 * (x_max - x_min));
+        }
+        x_se = std::min(x_se, 0.5 * (x_max - x_min) + std::log(grid_ratio));
+        Eigen::MatrixXd xl(np, 2);
+        xl.col(0) = xq.col(0);
+        xl.col(1) = xq.col(1);
+        const Eigen::VectorXd ca = xl.colPivHouseholderQr().solve(ya);
+        const Eigen::VectorXd ra = ya - xl * ca;
+        const double scatter_a = np > 2 ? ra.squaredNorm() / static_cast<double>(np - 2) : 0.0;
+        ln_a_hat = ca(0) + ca(1) * x_hat;
+        // The amplitude's own (linear) standard error at the best point, the scatter, and the valley.
+        const double own = f_best->amplitude + f_best->beta(nh) > 0
+                               ? st.ranking.front().amplitude_se_nm / (f_best->amplitude + f_best->beta(nh))
+                               : 0.0;
+        ln_a_se = std::sqrt(own * own + scatter_a + ca(1) * ca(1) * x_se * x_se);
     }
+    const double w_hat = f_best->w_s * std::exp(x_hat);
+    const double a_hat = std::exp(ln_a_hat);
     sim::EmaParams start = p;
     start.fsj_nm = std::max(fsj_base_nm, start.fdj_nm);
     const FitResult health_fit = fit_by_resimulation(run, s, start, health_names, mask, fsj_base_nm, kFitWindowSamples,
                                                      nullptr, kMaxFitIterations, &floor);
-    start = profile_params[best_profile];
-    std::vector<std::string> names = health_names;
-    for (const auto& nm : fitted_sim_effects(EffectKind::Stribeck)) names.push_back(nm);
-    out.fit = fit_by_resimulation(run, s, start, names, mask, fsj_base_nm, kFitWindowSamples, nullptr, kMaxFitIterations,
-                                  &floor);
+    // The model's own parameters refitted on the trajectory with the Stribeck friction at the profile's
+    // estimate (a smooth, well-conditioned fit).
+    start = health_fit.params;
+    set_parameter(start, "stribeck_amplitude", a_hat);
+    set_parameter(start, "stribeck_speed", w_hat);
+    out.fit = fit_by_resimulation(run, s, start, health_names, mask, fsj_base_nm, kFitWindowSamples, nullptr,
+                                  kMaxFitIterations, &floor);
+    out.fit.values.push_back({"stribeck_amplitude", a_hat, a_hat * ln_a_se});
+    out.fit.values.push_back({"stribeck_speed", w_hat, w_hat * x_se});
     st.simulations += health_fit.simulations + out.fit.simulations;
     const double rows = static_cast<double>(out.fit.rows);
     st.cost_health_only = health_fit.cost_end / rows;
@@ -509,7 +628,7 @@ std::vector<std::string> DiscoveryReport::added_effects() const {
     for (const auto& s : steps) {
         if (s.added || !s.added_terms.empty()) v.push_back(s.name_key);
     }
-    if (low_speed.added) v.push_back(effect_name(EffectKind::Stribeck));
+    if (low_speed.added && !low_speed.refit_of_torque) v.push_back(effect_name(EffectKind::Stribeck));
     for (const auto& f : sensor_findings) v.push_back(f.key);
     return v;
 }
@@ -531,7 +650,7 @@ std::string DiscoveryReport::summary() const {
             out += " (equivalent on this run: " + s.hypotheses[1].text + ")";
         }
     }
-    if (low_speed.added) {
+    if (low_speed.added && !low_speed.refit_of_torque) {
         out += (out.empty() ? "found: " : "; ") + library_effect_text(EffectKind::Stribeck) + " (by the trajectory)";
     }
     for (const auto& f : sensor_findings) out += (out.empty() ? "found: " : "; ") + f.text;
@@ -655,6 +774,10 @@ nlohmann::json DiscoveryReport::to_json() const {
                 ls["trajectory_cost_with"] = low_speed.cost_with;
                 ls["fit_delta_bic"] = low_speed.fit_delta_bic;
                 ls["explained"] = low_speed.explained;
+                ls["profile"] = nlohmann::json::array();
+                for (const auto& pr : low_speed.profile) {
+                    ls["profile"].push_back({{"stribeck_speed_rad_s", pr[0]}, {"amplitude_Nm", pr[1]}, {"trajectory_cost", pr[2]}});
+                }
                 ls["fitted"] = nlohmann::json::array();
                 for (const auto& f : low_speed.fitted) {
                     ls["fitted"].push_back({{"name", f.name}, {"value", f.value}, {"std_error", f.std_error}});
@@ -662,6 +785,7 @@ nlohmann::json DiscoveryReport::to_json() const {
             }
             ls["simulations"] = low_speed.simulations;
             ls["added"] = low_speed.added;
+            ls["refit_of_torque"] = low_speed.refit_of_torque;
             ls["verdict"] = low_speed.verdict;
         }
         j["low_speed_stage"] = ls;
@@ -1020,21 +1144,57 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
                                  return a.kind == EffectKind::Stribeck;
                              }) != accepted.end() ||
                              std::find(excluded.begin(), excluded.end(), EffectKind::Stribeck) != excluded.end();
-    if (stribeck_in) {
-        rep.low_speed.skipped = "Stribeck friction is in the model already";
+    // A Stribeck friction the torque rounds found is estimated again on the trajectory, which
+    // determines it far better (the torque fit leaves amplitude and w_s along their valley): the
+    // stage runs on the model without it, and its estimate replaces the torque fit's when it brings
+    // the trajectory closer than that fit.
+    const bool stribeck_by_torque = std::find_if(accepted.begin(), accepted.end(), [](const EffectShape& a) {
+                                        return a.kind == EffectKind::Stribeck;
+                                    }) != accepted.end();
+    if (stribeck_in && !stribeck_by_torque) {
+        rep.low_speed.skipped = "Stribeck friction was set aside by the hypotheses";
     } else {
         // The model's own parameters, refitted on the trajectory with and without the Stribeck friction.
+        sim::EmaParams p_base = p;
+        RunSignals base_sim_ls = model_sim;
+        if (stribeck_by_torque) {
+            p_base.effects.stribeck_amplitude_nm = 0.0;
+            base_sim_ls = run_signals(resimulate(run, p_base));
+        }
         std::vector<std::string> model_names = health_names;
         for (const auto& a : accepted) {
+            if (a.kind == EffectKind::Stribeck) continue;
             for (const auto& n : fitted_sim_effects(a.kind)) model_names.push_back(n);
         }
         for (std::size_t i = 0; i < p.terms.size(); ++i) model_names.push_back(term_parameter(i));
-        LowSpeedResult ls = low_speed_stage(run, s, floor, mask, fsj_base_nm, model_names, p, model_sim, traj_now.cost);
+        LowSpeedResult ls = low_speed_stage(run, s, floor, mask, fsj_base_nm, model_names, p_base, base_sim_ls,
+                                            trajectory_error(s, base_sim_ls, floor).cost);
         rep.low_speed = ls.stage;
-        if (ls.stage.added) {
+        if (stribeck_by_torque) {
+            rep.low_speed.refit_of_torque = true;
+            if (ls.stage.added && !(ls.stage.cost_with < traj_now.cost)) {
+                rep.low_speed.added = false;
+                rep.low_speed.verdict = "the torque rounds' fit is kept: the trajectory's estimate does not bring the "
+                                        "trajectory closer (" + fmt3(ls.stage.cost_with) + " against " + fmt3(traj_now.cost) + ")";
+            } else if (ls.stage.added) {
+                // ... nor may it spoil the torque evidence that found the friction: the chi-square of the
+                // torque window means may rise by at most kLowSpeedMaxTorqueChi2Rise.
+                const ErrorMetrics e_old = model_error(s, model_sim, mask), e_new = model_error(s, ls.fit.signals, mask);
+                const double windows = static_cast<double>(e_old.torque_samples) / static_cast<double>(kMetricWindowSamples);
+                const double rise = windows *
+                                    (std::pow(e_new.residual_torque_window_rms_nm, 2) - std::pow(e_old.residual_torque_window_rms_nm, 2)) /
+                                    std::pow(std::max(floor.torque_window_nm, 1e-300), 2);
+                if (rise > kLowSpeedMaxTorqueChi2Rise) {
+                    rep.low_speed.added = false;
+                    rep.low_speed.verdict = "the torque rounds' fit is kept: the trajectory's estimate would raise the "
+                                            "chi-square of the torque window means by " + fmt3(rise);
+                }
+            }
+        }
+        if (rep.low_speed.added) {
             p = ls.fit.params;
             record_health(ls.fit);
-            accepted.push_back({EffectKind::Stribeck, p.effects.stribeck_speed_rad_s, 0});
+            if (!stribeck_by_torque) accepted.push_back({EffectKind::Stribeck, p.effects.stribeck_speed_rad_s, 0});
             // The refitted values of the model's other parameters, then the Stribeck friction's.
             record_term_errors(p, ls.fit);
             for (const auto& f : ls.fit.values) {

@@ -19,6 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -92,6 +93,9 @@ struct LowSpeedStage {
     double base_cost = 0;                  ///< the same after the health columns (linearised)
     std::vector<LowSpeedEvidence> ranking;  ///< best delta BIC first
     bool screen_passes = false;
+    /// The profile over w_s (re-simulated, each point corrected by one linear step): speed, amplitude
+    /// and trajectory cost, finest around the best.
+    std::vector<std::array<double, 3>> profile;
     double cost_health_only = 0;           ///< trajectory cost after the health alone is fitted on it
     double cost_with = 0;                  ///< ... and after the health with the Stribeck friction
     double fit_delta_bic = 0;
@@ -100,6 +104,7 @@ struct LowSpeedStage {
     std::vector<FittedValue> fitted;
     int simulations = 0;
     bool added = false;
+    bool refit_of_torque = false;          ///< the torque rounds had found it: added = replaced their fit
     std::string verdict;
 };
 
