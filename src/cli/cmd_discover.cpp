@@ -106,7 +106,7 @@ void print_text(std::ostream& os, const std::string& path, const discovery::Disc
     if (r.low_speed.ran) {
         const auto& ls = r.low_speed;
         os << "\nlow-speed friction by the trajectory (" << ls.rows << " rows in noise floors; cost " << fmt(ls.cost_before)
-           << ", " << fmt(ls.base_cost) << " after the health columns):\n";
+           << ", " << fmt(ls.base_cost) << " after the model's own parameters, linearised):\n";
         for (std::size_t i = 0; i < ls.ranking.size() && i < kTextGenericRanking; ++i) {
             const auto& ev = ls.ranking[i];
             os << "  stribeck w_s = " << std::left << std::setw(8) << fmt(ev.stribeck_speed_rad_s, 4) << " rad/s  dBIC "

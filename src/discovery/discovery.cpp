@@ -313,13 +313,14 @@ void sensor_stage(const Run& run, const RunSignals& s, const NoiseFloor& floor, 
 /// linear in it well beyond the amplitudes that matter).
 constexpr double kLowSpeedProbeNm = 0.02;
 /// A Stribeck friction found by the trajectory must explain at least this share of the trajectory's
-/// excess over its noise floor once the health alone has been fitted on the trajectory: a column that
+/// excess over its noise floor once the model's own parameters alone have been fitted on the trajectory: a column that
 /// explains less is partly mimicking structure of another kind (left to the unexplained-structure report).
 constexpr double kLowSpeedMinExplained = 0.8;
 /// The linearised screen's share of that excess below which the fits are not tried.
 constexpr double kLowSpeedScreenMinExplained = 0.5;
 /// Scanned speeds re-simulated at their own amplitude to choose the start of the fit (one batch), and
-/// the refinement of the scan around the best of them (kLowSpeedFineSteps per scan step, +/- one step).
+/// the refinement of the scan around the best of them (kLowSpeedFineSteps points per scan step, over
+/// +/- three quarters of a step).
 constexpr std::size_t kLowSpeedProfilePoints = 8;
 constexpr int kLowSpeedFineSteps = 4;
 /// A re-estimate of a Stribeck friction the torque rounds found may raise the chi-square of the torque
@@ -334,12 +335,12 @@ struct LowSpeedResult {
 };
 
 /// Screens the Stribeck friction on the trajectory (linearised: one re-simulation per scanned speed,
-/// with the columns of the model's own parameters `health_names`: FDJ, eta_O and the coefficients of
+/// with the columns of the model's own parameters `model_names`: FDJ, eta_O and the coefficients of
 /// the effects and terms already added), and when a speed passes, fits it by re-simulation on the
 /// trajectory together with the model's parameters, against those parameters alone: the question is
 /// whether the model needs the Stribeck friction once everything it has is fitted to the trajectory.
 LowSpeedResult low_speed_stage(const Run& run, const RunSignals& s, const NoiseFloor& floor, const std::vector<char>& mask,
-                               double fsj_base_nm, const std::vector<std::string>& health_names, const sim::EmaParams& p,
+                               double fsj_base_nm, const std::vector<std::string>& model_names, const sim::EmaParams& p,
                                const RunSignals& model_sim, double cost_now) {
     LowSpeedResult out;
     LowSpeedStage& st = out.stage;
@@ -350,7 +351,7 @@ LowSpeedResult low_speed_stage(const Run& run, const RunSignals& s, const NoiseF
     st.rows = e_rows.size();
     std::vector<sim::EmaParams> batch;
     std::vector<double> steps;
-    for (const auto& name : health_names) {
+    for (const auto& name : model_names) {
         const double v = get_parameter(p, name);
         const bool health = name == "fdj_nm" || name == "eta_o";
         double h = health || v == 0.0 ? std::max(kSensitivityStepRel * std::abs(v), kSensitivityStepMin)
@@ -380,7 +381,7 @@ LowSpeedResult low_speed_stage(const Run& run, const RunSignals& s, const NoiseF
         for (Eigen::Index i = 0; i < n_rows; ++i) c(i) = (e(i) - r[static_cast<std::size_t>(i)]) / steps[j];
         return c;
     };
-    const auto nh = static_cast<Eigen::Index>(health_names.size());
+    const auto nh = static_cast<Eigen::Index>(model_names.size());
     Eigen::MatrixXd hcols(n_rows, nh);
     for (Eigen::Index j = 0; j < nh; ++j) hcols.col(j) = column(static_cast<std::size_t>(j));
     const Eigen::HouseholderQR<Eigen::MatrixXd> qr(hcols);
@@ -391,7 +392,7 @@ LowSpeedResult low_speed_stage(const Run& run, const RunSignals& s, const NoiseF
     const double ln_g = std::log(static_cast<double>(std::max<std::size_t>(1, grid.size())));
     st.base_cost = rss0 / dn;
     for (std::size_t i = 0; i < grid.size(); ++i) {
-        Eigen::VectorXd x = column(health_names.size() + i);
+        Eigen::VectorXd x = column(model_names.size() + i);
         x -= q * (q.transpose() * x);
         const double sxx = x.squaredNorm();
         if (!(sxx > 0)) continue;
@@ -472,7 +473,7 @@ LowSpeedResult low_speed_stage(const Run& run, const RunSignals& s, const NoiseF
             const Eigen::Map<const Eigen::VectorXd> ri(r.data(), n_rows);
             Eigen::MatrixXd a(n_rows, nh + 1);
             a.leftCols(nh) = hcols;
-            a.col(nh) = column(health_names.size() + pts[i].column);
+            a.col(nh) = column(model_names.size() + pts[i].column);
             pts[i].beta = a.colPivHouseholderQr().solve(ri);
             pts[i].rss = (ri - a * pts[i].beta).squaredNorm();
         }
@@ -580,14 +581,14 @@ LowSpeedResult low_speed_stage(const Run& run, const RunSignals& s, const NoiseF
     const double a_hat = std::exp(ln_a_hat);
     sim::EmaParams start = p;
     start.fsj_nm = std::max(fsj_base_nm, start.fdj_nm);
-    const FitResult health_fit = fit_by_resimulation(run, s, start, health_names, mask, fsj_base_nm, kFitWindowSamples,
+    const FitResult health_fit = fit_by_resimulation(run, s, start, model_names, mask, fsj_base_nm, kFitWindowSamples,
                                                      nullptr, kMaxFitIterations, &floor);
     // The model's own parameters refitted on the trajectory with the Stribeck friction at the profile's
     // estimate (a smooth, well-conditioned fit).
     start = health_fit.params;
     set_parameter(start, "stribeck_amplitude", a_hat);
     set_parameter(start, "stribeck_speed", w_hat);
-    out.fit = fit_by_resimulation(run, s, start, health_names, mask, fsj_base_nm, kFitWindowSamples, nullptr,
+    out.fit = fit_by_resimulation(run, s, start, model_names, mask, fsj_base_nm, kFitWindowSamples, nullptr,
                                   kMaxFitIterations, &floor);
     out.fit.values.push_back({"stribeck_amplitude", a_hat, a_hat * ln_a_se});
     out.fit.values.push_back({"stribeck_speed", w_hat, w_hat * x_se});
