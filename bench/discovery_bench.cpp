@@ -9,6 +9,7 @@
 // With plot_dir, the SVG of every unexplained structure is written there (CASE_SEED.svg).
 #include "../tests/support/discovery_cases.hpp"
 #include "core/sim_run.hpp"
+#include "discovery/candidate_effect.hpp"
 #include "discovery/discovery.hpp"
 #include "discovery/residual_plot.hpp"
 
@@ -39,7 +40,11 @@ struct Case {
     std::string set, id, expected, variables;  ///< expected name key; acceptable variables of unexplained structure
     emadiag::sim::SimConfig config;
     std::string injected;                       ///< text of the injected effect with its magnitude
+    std::vector<std::pair<std::string, double>> truth;  ///< library effects: sim::Effects name and true value
 };
+
+/// A fitted coefficient is within its uncertainty when the truth lies in its 95 % interval.
+constexpr double kWithinSe = 1.96;
 
 /// Library effects (the simulator's sim::Effects), drawn as in the previous bench.
 Case library_case(const std::string& kind, std::mt19937_64& g) {
@@ -59,6 +64,7 @@ Case library_case(const std::string& kind, std::mt19937_64& g) {
     if (kind == "current_gain_error") fx = {{"current_gain_error", sign * tc::uniform(g, 0.02, 0.06)}};
     if (kind == "hinge_offset") fx = {{"hinge_offset", sign * tc::uniform(g, 40, 150)}};
     if (kind == "inertia") fx = {{"true_inertia", emadiag::sim::EmaParams{}.j_kgm2 * tc::uniform(g, 1.1, 1.3)}};
+    c.truth = fx;
     for (const auto& [k, v] : fx) {
         c.config.params.effects.set(k, v);
         char b[64];
@@ -138,6 +144,8 @@ int main(int argc, char** argv) {
     std::printf("\n%-8s %-26s %-44s | %-44s %-8s | %-17s | %-13s | %-15s | %s\n", "set", "case", "injected", "named",
                 "verdict", "current A bef/aft", "traj cost b/a", "FDJ N m bef/aft", "time s (wall, cpu)");
     std::map<std::string, std::map<std::string, int>> verdicts;
+    std::vector<std::string> coefficient_lines;
+    int coefficients = 0, coefficients_within = 0;
     std::vector<double> times, cpu_times;
     std::uint64_t run_seed = seed * 1000;
     for (auto& c : cases) {
@@ -200,6 +208,24 @@ int main(int argc, char** argv) {
             } else {
                 verdict = "missed";
             }
+            // Library effects: each fitted coefficient against the truth, in its standard errors.
+            if (c.set == "library" && expected_named) {
+                for (const auto& [key, truth] : c.truth) {
+                    if (key == "ripple_periods") continue;  // scanned, not fitted
+                    const std::string field = emadiag::discovery::effect_field(key);
+                    for (const auto& t : rep.model.terms) {
+                        if (t.effect != field) continue;
+                        const double z = t.std_error > 0 ? std::abs(t.value - truth) / t.std_error : INFINITY;
+                        ++coefficients;
+                        coefficients_within += z <= kWithinSe ? 1 : 0;
+                        char b[200];
+                        std::snprintf(b, sizeof b, "  %-20s %-20s truth %-11.5g fitted %-11.5g +/- %-9.3g error %6.2f se %s",
+                                      c.id.c_str(), key.c_str(), truth, t.value, t.std_error, z,
+                                      z <= kWithinSe ? "within" : "OUTSIDE");
+                        coefficient_lines.emplace_back(b);
+                    }
+                }
+            }
             i0 = rep.model.error_before.current_rms_a;
             i1 = rep.model.error_after.current_rms_a;
             c0 = rep.trajectory_before.cost;
@@ -214,6 +240,11 @@ int main(int argc, char** argv) {
                     c.set.c_str(), c.id.c_str(), c.injected.c_str(), named.c_str(), verdict.c_str(), i0, i1, c0, c1, f0,
                     f1, secs, cpu);
         std::fflush(stdout);
+    }
+    if (!coefficient_lines.empty()) {
+        std::printf("\nlibrary effects named: fitted coefficients against the truth (within: |error| <= %.2f se)\n", kWithinSe);
+        for (const auto& l : coefficient_lines) std::printf("%s\n", l.c_str());
+        std::printf("  %d of %d coefficients within their uncertainty\n", coefficients_within, coefficients);
     }
     std::printf("\nverdicts per set (named: the expected name only; equiv: reported as one of two equivalent hypotheses;\n"
                 "unexpl-ok: unexplained structure against an expected variable; WRONG: another name and not the expected;\n"

@@ -103,6 +103,25 @@ void print_text(std::ostream& os, const std::string& path, const discovery::Disc
             os << '\n';
         }
     }
+    if (r.low_speed.ran) {
+        const auto& ls = r.low_speed;
+        os << "\nlow-speed friction by the trajectory (" << ls.rows << " rows in noise floors; cost " << fmt(ls.cost_before)
+           << ", " << fmt(ls.base_cost) << " after the model's own parameters, linearised):\n";
+        for (std::size_t i = 0; i < ls.ranking.size() && i < kTextGenericRanking; ++i) {
+            const auto& ev = ls.ranking[i];
+            os << "  stribeck w_s = " << std::left << std::setw(8) << fmt(ev.stribeck_speed_rad_s, 4) << " rad/s  dBIC "
+               << std::setw(9) << fmt(ev.delta_bic) << " a = " << fmt(ev.amplitude_nm) << " +/- " << fmt(ev.amplitude_se_nm, 2)
+               << " N m\n";
+        }
+        os << "  " << ls.verdict << '\n';
+        if (ls.added) {
+            os << "  " << (ls.refit_of_torque ? "stribeck re-estimated on the trajectory (replaces the torque fit)"
+                                              : "added stribeck (Stribeck friction, found by the trajectory)")
+               << "; profile over w_s and re-simulation fit on the trajectory (" << ls.simulations << " simulations):";
+            for (const auto& f : ls.fitted) os << ' ' << f.name << '=' << fmt(f.value, 5) << " +/- " << fmt(f.std_error, 2);
+            os << '\n';
+        }
+    }
     const auto added = r.added_effects();
     os << '\n' << (added.empty() ? "no missing effect found" : "added effects:");
     for (const auto& a : added) os << ' ' << a;

@@ -1,14 +1,21 @@
+// GCC 12 reports false -Wmaybe-uninitialized inside Eigen's AVX-512 kernels (matrix-vector product).
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"
 #include "discovery/discovery.hpp"
 
 #include "core/emadiag_error.hpp"
 #include "discovery/candidate_effect.hpp"
 #include "discovery/physics_names.hpp"
+#include "discovery/screen_windows.hpp"
 #include "discovery/term_library.hpp"
 #include "estimation/health_estimate.hpp"
 #include "estimation/physics_estimator.hpp"
 
+#include <Eigen/Dense>
+
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace emadiag::discovery {
 namespace {
@@ -301,6 +308,320 @@ void sensor_stage(const Run& run, const RunSignals& s, const NoiseFloor& floor, 
     traj_now = te;
 }
 
+/// Low-speed friction stage (docs/discovery.md "Low-speed friction by the trajectory"). The Stribeck
+/// column at each scanned speed is re-simulated at this amplitude (N m; the trajectory's response is
+/// linear in it well beyond the amplitudes that matter).
+constexpr double kLowSpeedProbeNm = 0.02;
+/// A Stribeck friction found by the trajectory must explain at least this share of the trajectory's
+/// excess over its noise floor once the model's own parameters alone have been fitted on the trajectory: a column that
+/// explains less is partly mimicking structure of another kind (left to the unexplained-structure report).
+constexpr double kLowSpeedMinExplained = 0.8;
+/// The linearised screen's share of that excess below which the fits are not tried.
+constexpr double kLowSpeedScreenMinExplained = 0.5;
+/// Scanned speeds re-simulated at their own amplitude to choose the start of the fit (one batch), and
+/// the refinement of the scan around the best of them (kLowSpeedFineSteps points per scan step, over
+/// +/- three quarters of a step).
+constexpr std::size_t kLowSpeedProfilePoints = 8;
+constexpr int kLowSpeedFineSteps = 4;
+/// A re-estimate of a Stribeck friction the torque rounds found may raise the chi-square of the torque
+/// window means (against their floor) by at most this (a 95 % change for one parameter is 3.84).
+constexpr double kLowSpeedMaxTorqueChi2Rise = 4.0;
+/// Profile points within this many scan steps of the best enter the estimate of w_s and its error.
+constexpr double kLowSpeedProfileSpan = 1.5;
+
+struct LowSpeedResult {
+    LowSpeedStage stage;
+    FitResult fit;  ///< the fit with the Stribeck friction (when stage.added)
+};
+
+/// Screens the Stribeck friction on the trajectory (linearised: one re-simulation per scanned speed,
+/// with the columns of the model's own parameters `model_names`: FDJ, eta_O and the coefficients of
+/// the effects and terms already added), and when a speed passes, fits it by re-simulation on the
+/// trajectory together with the model's parameters, against those parameters alone: the question is
+/// whether the model needs the Stribeck friction once everything it has is fitted to the trajectory.
+LowSpeedResult low_speed_stage(const Run& run, const RunSignals& s, const NoiseFloor& floor, const std::vector<char>& mask,
+                               double fsj_base_nm, const std::vector<std::string>& model_names, const sim::EmaParams& p,
+                               const RunSignals& model_sim, double cost_now) {
+    LowSpeedResult out;
+    LowSpeedStage& st = out.stage;
+    st.ran = true;
+    st.cost_before = cost_now;
+    const std::vector<double> e_rows = trajectory_rows(s, model_sim, floor);
+    const auto n_rows = static_cast<Eigen::Index>(e_rows.size());
+    st.rows = e_rows.size();
+    std::vector<sim::EmaParams> batch;
+    std::vector<double> steps;
+    for (const auto& name : model_names) {
+        const double v = get_parameter(p, name);
+        const bool health = name == "fdj_nm" || name == "eta_o";
+        double h = health || v == 0.0 ? std::max(kSensitivityStepRel * std::abs(v), kSensitivityStepMin)
+                                      : kSensitivityStepRel * std::abs(v);
+        if (name == "eta_o" && v + h > 1.0) h = -h;
+        sim::EmaParams q = p;
+        set_parameter(q, name, v + h);
+        q.fsj_nm = std::max(fsj_base_nm, q.fdj_nm);
+        steps.push_back(get_parameter(q, name) - v);
+        batch.push_back(q);
+    }
+    const std::vector<EffectShape> grid = shape_grid(EffectKind::Stribeck, s);
+    for (const auto& shape : grid) {
+        sim::EmaParams q = p;
+        q.effects.stribeck_amplitude_nm = kLowSpeedProbeNm;
+        q.effects.stribeck_speed_rad_s = shape.shape1;
+        steps.push_back(kLowSpeedProbeNm);
+        batch.push_back(q);
+    }
+    const std::vector<Run> runs = resimulate_many(run, batch);
+    st.simulations += static_cast<int>(runs.size());
+    const Eigen::Map<const Eigen::VectorXd> e(e_rows.data(), n_rows);
+    // Column of parameter j: d(model) / d(parameter), in noise floors (e = measured - model).
+    auto column = [&](std::size_t j) {
+        const std::vector<double> r = trajectory_rows(s, run_signals(runs[j]), floor);
+        Eigen::VectorXd c(n_rows);
+        for (Eigen::Index i = 0; i < n_rows; ++i) c(i) = (e(i) - r[static_cast<std::size_t>(i)]) / steps[j];
+        return c;
+    };
+    const auto nh = static_cast<Eigen::Index>(model_names.size());
+    Eigen::MatrixXd hcols(n_rows, nh);
+    for (Eigen::Index j = 0; j < nh; ++j) hcols.col(j) = column(static_cast<std::size_t>(j));
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(hcols);
+    const Eigen::MatrixXd q = qr.householderQ() * Eigen::MatrixXd::Identity(n_rows, nh);
+    const Eigen::VectorXd e0 = e - q * (q.transpose() * e);
+    const double rss0 = e0.squaredNorm();
+    const double dn = static_cast<double>(n_rows);
+    const double ln_g = std::log(static_cast<double>(std::max<std::size_t>(1, grid.size())));
+    st.base_cost = rss0 / dn;
+    for (std::size_t i = 0; i < grid.size(); ++i) {
+        Eigen::VectorXd x = column(model_names.size() + i);
+        x -= q * (q.transpose() * x);
+        const double sxx = x.squaredNorm();
+        if (!(sxx > 0)) continue;
+        const double sxy = x.dot(e0);
+        const double rss1 = std::max(rss0 - sxy * sxy / sxx, std::numeric_limits<double>::min());
+        LowSpeedEvidence ev;
+        ev.stribeck_speed_rad_s = grid[i].shape1;
+        ev.amplitude_nm = sxy / sxx;
+        ev.amplitude_se_nm = std::sqrt(rss1 / std::max(1.0, dn - static_cast<double>(nh) - 1.0) / sxx);
+        ev.delta_bic = dn * std::log(rss0 / rss1) - 2.0 * std::log(dn) - 2.0 * ln_g;
+        ev.sign_ok = ev.amplitude_nm > 0;
+        st.ranking.push_back(ev);
+    }
+    std::stable_sort(st.ranking.begin(), st.ranking.end(), [](const LowSpeedEvidence& a, const LowSpeedEvidence& b) {
+        if (a.sign_ok != b.sign_ok) return a.sign_ok;
+        return a.delta_bic > b.delta_bic;
+    });
+    if (st.ranking.empty() || !st.ranking.front().sign_ok || !(st.ranking.front().delta_bic > kMinDeltaBic) ||
+        st.ranking.front().amplitude_nm < kMinEffectPeakNm) {
+        st.verdict = st.ranking.empty() ? "no usable Stribeck column"
+                     : !st.ranking.front().sign_ok
+                         ? "no Stribeck speed with a positive amplitude"
+                         : "no Stribeck friction in the trajectory (best: w_s = " + fmt3(st.ranking.front().stribeck_speed_rad_s) +
+                               " rad/s, amplitude " + fmt3(st.ranking.front().amplitude_nm) + " N m, delta BIC " +
+                               fmt3(st.ranking.front().delta_bic) + ")";
+        return out;
+    }
+    // The fits below cost about a hundred re-simulations: they run only when the linearised screen
+    // says the trajectory is significantly above its floor after the model's own parameters (z of the
+    // chi-square > kStructureMinZ) and the best speed explains at least half of that excess.
+    {
+        const LowSpeedEvidence& b = st.ranking.front();
+        const double rss1 = rss0 * std::exp(-(b.delta_bic + 2.0 * std::log(dn) + 2.0 * ln_g) / dn);
+        const double z = (rss0 - dn) / std::sqrt(2.0 * dn);
+        const double share = rss0 > dn ? (rss0 - rss1) / (rss0 - dn) : 0.0;
+        if (!(z > kStructureMinZ) || share < kLowSpeedScreenMinExplained) {
+            st.verdict = "no Stribeck friction in the trajectory: after the model's own parameters the trajectory is " +
+                         fmt3(st.base_cost) + " x its floor in chi-square (z = " + fmt3(z) + "), and the best speed (w_s = " +
+                         fmt3(b.stribeck_speed_rad_s) + " rad/s) explains " + fmt3(100.0 * share) + " % of the excess";
+            return out;
+        }
+    }
+    st.screen_passes = true;
+    // The trajectory sees mainly the impulse, amplitude x w_s: a long, curved valley over w_s on which
+    // the re-simulated cost is rough at small steps (the simulator's current chatter), so a
+    // Levenberg-Marquardt fit from the linearised best stops where it starts, with standard errors that
+    // do not cover the truth. The start is chosen on the profile over w_s instead, in two batches: the
+    // best scanned speeds re-simulated at their own amplitude, then a grid four times finer around the
+    // best of them at the same impulse; each point corrected by one linear step in the model's
+    // parameters and the amplitude; a parabola through the best three in ln w_s gives the start.
+    struct ProfilePoint {
+        double w_s = 0, amplitude = 0;
+        std::size_t column = 0;  ///< the scanned speed whose column linearises the point
+        sim::EmaParams params;
+        double rss = std::numeric_limits<double>::infinity();
+        Eigen::VectorXd beta;
+    };
+    auto nearest_column = [&](double w) {
+        std::size_t best_i = 0;
+        for (std::size_t i = 1; i < grid.size(); ++i) {
+            if (std::abs(std::log(grid[i].shape1 / w)) < std::abs(std::log(grid[best_i].shape1 / w))) best_i = i;
+        }
+        return best_i;
+    };
+    auto evaluate_profile = [&](std::vector<ProfilePoint>& pts) {
+        std::vector<sim::EmaParams> params;
+        for (auto& pt : pts) {
+            pt.params = p;
+            set_parameter(pt.params, "stribeck_amplitude", pt.amplitude);
+            set_parameter(pt.params, "stribeck_speed", pt.w_s);
+            pt.params.fsj_nm = std::max(fsj_base_nm, pt.params.fdj_nm);
+            params.push_back(pt.params);
+        }
+        const std::vector<Run> prs = resimulate_many(run, params);
+        st.simulations += static_cast<int>(prs.size());
+        for (std::size_t i = 0; i < pts.size(); ++i) {
+            const std::vector<double> r = trajectory_rows(s, run_signals(prs[i]), floor);
+            const Eigen::Map<const Eigen::VectorXd> ri(r.data(), n_rows);
+            Eigen::MatrixXd a(n_rows, nh + 1);
+            a.leftCols(nh) = hcols;
+            a.col(nh) = column(model_names.size() + pts[i].column);
+            pts[i].beta = a.colPivHouseholderQr().solve(ri);
+            pts[i].rss = (ri - a * pts[i].beta).squaredNorm();
+        }
+    };
+    std::vector<ProfilePoint> coarse;
+    for (const auto& ev : st.ranking) {
+        if (coarse.size() >= kLowSpeedProfilePoints || !ev.sign_ok) break;
+        ProfilePoint pt;
+        pt.w_s = ev.stribeck_speed_rad_s;
+        pt.amplitude = ev.amplitude_nm;
+        pt.column = nearest_column(pt.w_s);
+        coarse.push_back(pt);
+    }
+    evaluate_profile(coarse);
+    const ProfilePoint c_best = *std::min_element(coarse.begin(), coarse.end(), [](const ProfilePoint& x, const ProfilePoint& y) {
+        return x.rss < y.rss;
+    });
+    const double grid_ratio = grid.size() >= 2 ? grid[1].shape1 / grid[0].shape1 : 1.25;
+    const double fine_ratio = std::pow(grid_ratio, 1.0 / kLowSpeedFineSteps);
+    const double impulse = (c_best.amplitude + c_best.beta(nh)) * c_best.w_s;
+    std::vector<ProfilePoint> fine;
+    for (int k = -kLowSpeedFineSteps + 1; k < kLowSpeedFineSteps; ++k) {
+        ProfilePoint pt;
+        pt.w_s = c_best.w_s * std::pow(fine_ratio, k);
+        pt.amplitude = std::max(impulse / pt.w_s, kLowSpeedProbeNm * 0.01);
+        pt.column = nearest_column(pt.w_s);
+        fine.push_back(pt);
+    }
+    evaluate_profile(fine);
+    for (const auto* set : {&coarse, &fine}) {
+        for (const auto& pt : *set) st.profile.push_back({pt.w_s, pt.amplitude + pt.beta(nh), pt.rss / dn});
+    }
+    std::sort(st.profile.begin(), st.profile.end());
+    // The estimate and its uncertainty from the profile, not from a local Jacobian: x = ln w_s, a
+    // quadratic in x least-squares fitted to the profile points within kLowSpeedProfileSpan scan steps
+    // of the best; its vertex is the estimate; the variance of the vertex from the scatter of the
+    // points about the quadratic (the simulator's chatter makes the cost rough from point to point)
+    // plus the sensor noise's share 1 / (N c) (a change of 1 in chi-square). The amplitude follows
+    // the valley: ln A linear in x over the same points, at the vertex.
+    const ProfilePoint* f_best = &fine[0];
+    for (const auto& pt : fine) {
+        if (pt.rss < f_best->rss) f_best = &pt;
+    }
+    std::vector<const ProfilePoint*> near;
+    for (const auto* set : {&coarse, &fine}) {
+        for (const auto& pt : *set) {
+            if (std::abs(std::log(pt.w_s / f_best->w_s)) <= kLowSpeedProfileSpan * std::log(grid_ratio) + 1e-9 &&
+                pt.amplitude + pt.beta(nh) > 0) {
+                near.push_back(&pt);
+            }
+        }
+    }
+    const double x0 = std::log(f_best->w_s);
+    double x_hat = 0, x_se = 0, ln_a_hat = std::log(f_best->amplitude + f_best->beta(nh)), ln_a_se = 0;
+    {
+        const auto np = static_cast<Eigen::Index>(near.size());
+        Eigen::MatrixXd xq(np, 3);
+        Eigen::VectorXd yc(np), ya(np);
+        double x_min = 0, x_max = 0;
+        for (Eigen::Index i = 0; i < np; ++i) {
+            const double x = std::log(near[static_cast<std::size_t>(i)]->w_s) - x0;
+            xq(i, 0) = 1.0;
+            xq(i, 1) = x;
+            xq(i, 2) = x * x;
+            yc(i) = near[static_cast<std::size_t>(i)]->rss / dn;
+            ya(i) = std::log(near[static_cast<std::size_t>(i)]->amplitude + near[static_cast<std::size_t>(i)]->beta(nh));
+            x_min = std::min(x_min, x);
+            x_max = std::max(x_max, x);
+        }
+        const Eigen::VectorXd cq = xq.colPivHouseholderQr().solve(yc);
+        // The scatter's variance is estimated from a few points: scaled by (t / z)^2 at 95 % for its
+        // degrees of freedom (Cornish-Fisher expansion of Student's t), so the interval keeps its cover.
+        const double dof_q = static_cast<double>(std::max<Eigen::Index>(1, np - 3));
+        constexpr double kZ95 = 1.959964;
+        const double t95 = kZ95 + (std::pow(kZ95, 3) + kZ95) / (4.0 * dof_q) +
+                           (5.0 * std::pow(kZ95, 5) + 16.0 * std::pow(kZ95, 3) + 3.0 * kZ95) / (96.0 * dof_q * dof_q);
+        const Eigen::VectorXd rq = yc - xq * cq;
+        const double scatter2 = np > 3 ? rq.squaredNorm() / dof_q * (t95 / kZ95) * (t95 / kZ95) : 0.0;
+        const Eigen::Matrix3d cov = scatter2 * (xq.transpose() * xq).inverse();
+        if (cq(2) > 0 && np > 3) {
+            x_hat = std::clamp(-cq(1) / (2.0 * cq(2)), x_min, x_max);
+            const Eigen::Vector3d g(0.0, -1.0 / (2.0 * cq(2)), cq(1) / (2.0 * cq(2) * cq(2)));
+            x_se = std::sqrt(std::max(0.0, g.dot(cov * g)) + 1.0 / (dn * cq(2)));
+        }
+        // No curvature, or a vertex at the edge: w_s is known only to within the span of the points.
+        if (!(cq(2) > 0) || np <= 3 || x_hat <= x_min || x_hat >= x_max) {
+            x_hat = std::clamp(x_hat, x_min, x_max);
+            x_se = std::max(x_se, 0.5 * (x_max - x_min));
+        }
+        x_se = std::min(x_se, 0.5 * (x_max - x_min) + std::log(grid_ratio));
+        Eigen::MatrixXd xl(np, 2);
+        xl.col(0) = xq.col(0);
+        xl.col(1) = xq.col(1);
+        const Eigen::VectorXd ca = xl.colPivHouseholderQr().solve(ya);
+        const Eigen::VectorXd ra = ya - xl * ca;
+        const double scatter_a = np > 2 ? ra.squaredNorm() / static_cast<double>(np - 2) : 0.0;
+        ln_a_hat = ca(0) + ca(1) * x_hat;
+        // The amplitude's own (linear) standard error at the best point, the scatter, and the valley.
+        const double own = f_best->amplitude + f_best->beta(nh) > 0
+                               ? st.ranking.front().amplitude_se_nm / (f_best->amplitude + f_best->beta(nh))
+                               : 0.0;
+        ln_a_se = std::sqrt(own * own + scatter_a + ca(1) * ca(1) * x_se * x_se);
+    }
+    const double w_hat = f_best->w_s * std::exp(x_hat);
+    const double a_hat = std::exp(ln_a_hat);
+    sim::EmaParams start = p;
+    start.fsj_nm = std::max(fsj_base_nm, start.fdj_nm);
+    const FitResult health_fit = fit_by_resimulation(run, s, start, model_names, mask, fsj_base_nm, kFitWindowSamples,
+                                                     nullptr, kMaxFitIterations, &floor);
+    // The model's own parameters refitted on the trajectory with the Stribeck friction at the profile's
+    // estimate (a smooth, well-conditioned fit).
+    start = health_fit.params;
+    set_parameter(start, "stribeck_amplitude", a_hat);
+    set_parameter(start, "stribeck_speed", w_hat);
+    out.fit = fit_by_resimulation(run, s, start, model_names, mask, fsj_base_nm, kFitWindowSamples, nullptr,
+                                  kMaxFitIterations, &floor);
+    out.fit.values.push_back({"stribeck_amplitude", a_hat, a_hat * ln_a_se});
+    out.fit.values.push_back({"stribeck_speed", w_hat, w_hat * x_se});
+    st.simulations += health_fit.simulations + out.fit.simulations;
+    const double rows = static_cast<double>(out.fit.rows);
+    st.cost_health_only = health_fit.cost_end / rows;
+    st.cost_with = out.fit.cost_end / rows;
+    st.fitted = out.fit.values;
+    st.peak_nm = out.fit.params.effects.stribeck_amplitude_nm;
+    st.fit_delta_bic = rows * std::log(health_fit.cost_end / std::max(out.fit.cost_end, std::numeric_limits<double>::min())) -
+                       2.0 * std::log(rows) - 2.0 * ln_g;
+    const double z_model = (health_fit.cost_end - rows) / std::sqrt(2.0 * rows);
+    st.explained = z_model > kStructureMinZ ? (st.cost_health_only - st.cost_with) / (st.cost_health_only - 1.0) : 0.0;
+    const std::string figures = "trajectory cost " + fmt3(cost_now) + " (the model's own parameters refitted alone " + fmt3(st.cost_health_only) +
+                                ") -> " + fmt3(st.cost_with) + ", delta BIC " + fmt3(st.fit_delta_bic) + ", explains " +
+                                fmt3(100.0 * st.explained) + " % of the excess over the floor, amplitude " +
+                                fmt3(st.peak_nm) + " N m";
+    if (!(st.fit_delta_bic > kMinDeltaBic)) {
+        st.verdict = "not confirmed by the fit: " + figures;
+    } else if (st.peak_nm < kMinEffectPeakNm) {
+        st.verdict = "not added: amplitude below " + fmt3(kMinEffectPeakNm) + " N m: " + figures;
+    } else if (st.explained < kLowSpeedMinExplained) {
+        st.verdict = "not added: explains less than " + fmt3(100.0 * kLowSpeedMinExplained) +
+                     " % of the trajectory's excess (structure of another kind): " + figures;
+    } else if (!(st.cost_with < cost_now)) {
+        st.verdict = "not added: the trajectory does not come closer: " + figures;
+    } else {
+        st.added = true;
+        st.verdict = "added: " + figures;
+    }
+    return out;
+}
+
 }  // namespace
 
 std::vector<std::string> DiscoveryReport::added_effects() const {
@@ -308,6 +629,7 @@ std::vector<std::string> DiscoveryReport::added_effects() const {
     for (const auto& s : steps) {
         if (s.added || !s.added_terms.empty()) v.push_back(s.name_key);
     }
+    if (low_speed.added && !low_speed.refit_of_torque) v.push_back(effect_name(EffectKind::Stribeck));
     for (const auto& f : sensor_findings) v.push_back(f.key);
     return v;
 }
@@ -328,6 +650,9 @@ std::string DiscoveryReport::summary() const {
         if (s.equivalent && s.hypotheses.size() >= 2) {
             out += " (equivalent on this run: " + s.hypotheses[1].text + ")";
         }
+    }
+    if (low_speed.added && !low_speed.refit_of_torque) {
+        out += (out.empty() ? "found: " : "; ") + library_effect_text(EffectKind::Stribeck) + " (by the trajectory)";
     }
     for (const auto& f : sensor_findings) out += (out.empty() ? "found: " : "; ") + f.text;
     if (const StructureReport* u = unexplained()) {
@@ -429,6 +754,42 @@ nlohmann::json DiscoveryReport::to_json() const {
     for (const auto& f : sensor_findings) {
         j["sensor_findings"].push_back({{"name", f.key}, {"physics", f.text}, {"term", sim::to_json(f.term)},
                                         {"trajectory_cost_before", f.cost_before}, {"trajectory_cost_after", f.cost_after}});
+    }
+    {
+        nlohmann::json ls;
+        ls["ran"] = low_speed.ran;
+        if (!low_speed.skipped.empty()) ls["skipped"] = low_speed.skipped;
+        if (low_speed.ran) {
+            ls["trajectory_rows"] = low_speed.rows;
+            ls["trajectory_cost_before"] = low_speed.cost_before;
+            ls["base_cost"] = low_speed.base_cost;
+            ls["ranking"] = nlohmann::json::array();
+            for (const auto& ev : low_speed.ranking) {
+                ls["ranking"].push_back({{"stribeck_speed_rad_s", ev.stribeck_speed_rad_s}, {"amplitude_Nm", ev.amplitude_nm},
+                                         {"amplitude_se_Nm", ev.amplitude_se_nm}, {"delta_bic", ev.delta_bic},
+                                         {"sign_ok", ev.sign_ok}});
+            }
+            ls["screen_passes"] = low_speed.screen_passes;
+            if (low_speed.screen_passes) {
+                ls["trajectory_cost_health_only"] = low_speed.cost_health_only;
+                ls["trajectory_cost_with"] = low_speed.cost_with;
+                ls["fit_delta_bic"] = low_speed.fit_delta_bic;
+                ls["explained"] = low_speed.explained;
+                ls["profile"] = nlohmann::json::array();
+                for (const auto& pr : low_speed.profile) {
+                    ls["profile"].push_back({{"stribeck_speed_rad_s", pr[0]}, {"amplitude_Nm", pr[1]}, {"trajectory_cost", pr[2]}});
+                }
+                ls["fitted"] = nlohmann::json::array();
+                for (const auto& f : low_speed.fitted) {
+                    ls["fitted"].push_back({{"name", f.name}, {"value", f.value}, {"std_error", f.std_error}});
+                }
+            }
+            ls["simulations"] = low_speed.simulations;
+            ls["added"] = low_speed.added;
+            ls["refit_of_torque"] = low_speed.refit_of_torque;
+            ls["verdict"] = low_speed.verdict;
+        }
+        j["low_speed_stage"] = ls;
     }
     j["trajectory_cost_before"] = trajectory_before.cost;
     j["trajectory_cost_after"] = trajectory_after.cost;
@@ -779,6 +1140,86 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
     }
     // Sensor stage: the angle channel, which the torque residual does not see (offset and drift).
     if (options.open_world) sensor_stage(run, s, floor, mask, p, model_sim, traj_now, rep);
+    // Low-speed friction by the trajectory: a Stribeck friction the torque residual is too noisy to see.
+    const bool stribeck_in = std::find_if(accepted.begin(), accepted.end(), [](const EffectShape& a) {
+                                 return a.kind == EffectKind::Stribeck;
+                             }) != accepted.end() ||
+                             std::find(excluded.begin(), excluded.end(), EffectKind::Stribeck) != excluded.end();
+    // A Stribeck friction the torque rounds found is estimated again on the trajectory, which
+    // determines it far better (the torque fit leaves amplitude and w_s along their valley): the
+    // stage runs on the model without it, and its estimate replaces the torque fit's when it brings
+    // the trajectory closer than that fit.
+    const bool stribeck_by_torque = std::find_if(accepted.begin(), accepted.end(), [](const EffectShape& a) {
+                                        return a.kind == EffectKind::Stribeck;
+                                    }) != accepted.end();
+    if (stribeck_in && !stribeck_by_torque) {
+        rep.low_speed.skipped = "Stribeck friction was set aside by the hypotheses";
+    } else {
+        // The model's own parameters, refitted on the trajectory with and without the Stribeck friction.
+        sim::EmaParams p_base = p;
+        RunSignals base_sim_ls = model_sim;
+        if (stribeck_by_torque) {
+            p_base.effects.stribeck_amplitude_nm = 0.0;
+            base_sim_ls = run_signals(resimulate(run, p_base));
+        }
+        std::vector<std::string> model_names = health_names;
+        for (const auto& a : accepted) {
+            if (a.kind == EffectKind::Stribeck) continue;
+            for (const auto& n : fitted_sim_effects(a.kind)) model_names.push_back(n);
+        }
+        for (std::size_t i = 0; i < p.terms.size(); ++i) model_names.push_back(term_parameter(i));
+        LowSpeedResult ls = low_speed_stage(run, s, floor, mask, fsj_base_nm, model_names, p_base, base_sim_ls,
+                                            trajectory_error(s, base_sim_ls, floor).cost);
+        rep.low_speed = ls.stage;
+        if (stribeck_by_torque) {
+            rep.low_speed.refit_of_torque = true;
+            if (ls.stage.added && !(ls.stage.cost_with < traj_now.cost)) {
+                rep.low_speed.added = false;
+                rep.low_speed.verdict = "the torque rounds' fit is kept: the trajectory's estimate does not bring the "
+                                        "trajectory closer (" + fmt3(ls.stage.cost_with) + " against " + fmt3(traj_now.cost) + ")";
+            } else if (ls.stage.added) {
+                // ... nor may it spoil the torque evidence that found the friction: the chi-square of the
+                // torque window means may rise by at most kLowSpeedMaxTorqueChi2Rise.
+                const ErrorMetrics e_old = model_error(s, model_sim, mask), e_new = model_error(s, ls.fit.signals, mask);
+                const double windows = static_cast<double>(e_old.torque_samples) / static_cast<double>(kMetricWindowSamples);
+                const double rise = windows *
+                                    (std::pow(e_new.residual_torque_window_rms_nm, 2) - std::pow(e_old.residual_torque_window_rms_nm, 2)) /
+                                    std::pow(std::max(floor.torque_window_nm, 1e-300), 2);
+                if (rise > kLowSpeedMaxTorqueChi2Rise) {
+                    rep.low_speed.added = false;
+                    rep.low_speed.verdict = "the torque rounds' fit is kept: the trajectory's estimate would raise the "
+                                            "chi-square of the torque window means by " + fmt3(rise);
+                }
+            }
+        }
+        if (rep.low_speed.added) {
+            p = ls.fit.params;
+            record_health(ls.fit);
+            if (!stribeck_by_torque) accepted.push_back({EffectKind::Stribeck, p.effects.stribeck_speed_rad_s, 0});
+            // The refitted values of the model's other parameters, then the Stribeck friction's.
+            record_term_errors(p, ls.fit);
+            for (const auto& f : ls.fit.values) {
+                if (f.name == "fdj_nm" || f.name == "eta_o" || is_term_parameter(f.name)) continue;
+                const std::string field = effect_field(f.name);
+                bool known = false;
+                for (auto& t : rep.model.terms) {
+                    if (t.effect == field) {
+                        t.value = f.value;
+                        t.std_error = f.std_error;
+                        known = true;
+                    }
+                }
+                if (!known) rep.model.terms.push_back({field, f.value, f.std_error});
+            }
+            for (auto& f : rep.sensor_findings) {  // the sensor terms as refitted
+                for (const auto& t : p.terms) {
+                    if (t.target == f.term.target && t.basis_text() == f.term.basis_text()) f.term = t;
+                }
+            }
+            model_sim = std::move(ls.fit.signals);
+            traj_now = trajectory_error(s, model_sim, floor);
+        }
+    }
     rep.structure = structure_reports(s, model_sim, mask, floor);
     rep.trajectory_after = traj_now;
     rep.model.error_after = model_error(s, model_sim, mask);

@@ -19,6 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -68,11 +69,51 @@ struct SensorFinding {
     double cost_before = 0, cost_after = 0;
 };
 
+/// One Stribeck speed of the low-speed friction stage: the trajectory (current, speed, angle, load in
+/// noise floors) regressed on the health columns and the Stribeck column at that speed, linearised
+/// around the model by one re-simulation each.
+struct LowSpeedEvidence {
+    double stribeck_speed_rad_s = 0;
+    double amplitude_nm = 0, amplitude_se_nm = 0;
+    double delta_bic = 0;  ///< N ln(RSS_0 / RSS_1) - 2 ln N - 2 ln G over the N trajectory rows
+    bool sign_ok = true;
+};
+
+/// Low-speed friction by the trajectory (docs/discovery.md): friction that acts only while the speed
+/// crosses zero (Stribeck) lasts a few samples, which the torque residual drops (slipping samples away
+/// from kinks) or sees through its derivative noise; the speed step it leaves persists through the
+/// saturated acceleration and the angle integrates it, so the trajectory sees it 30 times as well.
+/// Screened on the trajectory, fitted on it by re-simulation with the health, and added only when the
+/// fit confirms it and explains most of the trajectory's excess over the noise floor.
+struct LowSpeedStage {
+    bool ran = false;
+    std::string skipped;                   ///< why the stage did not run
+    std::size_t rows = 0;                  ///< trajectory rows (4 channels x samples)
+    double cost_before = 0;                ///< trajectory cost of the model before the stage
+    double base_cost = 0;                  ///< the same after the health columns (linearised)
+    std::vector<LowSpeedEvidence> ranking;  ///< best delta BIC first
+    bool screen_passes = false;
+    /// The profile over w_s (re-simulated, each point corrected by one linear step): speed, amplitude
+    /// and trajectory cost, finest around the best.
+    std::vector<std::array<double, 3>> profile;
+    double cost_health_only = 0;           ///< trajectory cost after the health alone is fitted on it
+    double cost_with = 0;                  ///< ... and after the health with the Stribeck friction
+    double fit_delta_bic = 0;
+    double explained = 0;                  ///< share of the excess over the floor (cost_health_only - 1) explained
+    double peak_nm = 0;
+    std::vector<FittedValue> fitted;
+    int simulations = 0;
+    bool added = false;
+    bool refit_of_torque = false;          ///< the torque rounds had found it: added = replaced their fit
+    std::string verdict;
+};
+
 struct DiscoveryReport {
     std::string load_case, sequence;
     std::size_t samples = 0;
     NoiseFloor floor;                            ///< the run's own noise floor (trajectory.hpp)
     std::vector<SensorFinding> sensor_findings;
+    LowSpeedStage low_speed;                     ///< Stribeck friction found by the trajectory (library effect)
     std::vector<StructureReport> structure;      ///< the residual of the final model, per channel
     TrajectoryError trajectory_before, trajectory_after;
     std::vector<HealthValue> baseline_health;  ///< step 1: estimated or datasheet

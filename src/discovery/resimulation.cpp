@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <thread>
+#include <utility>
 
 namespace emadiag::discovery {
 namespace {
@@ -77,6 +78,24 @@ Run finish_resimulation(const Run& run, const sim::SimConfig& c, const sim::SimR
 }
 
 }  // namespace
+
+std::vector<double> trajectory_rows(const RunSignals& a, const RunSignals& b, const NoiseFloor& f) {
+    if (a.size() != b.size()) {
+        throw EmadiagError("discovery: model and measurement differ in length (" + std::to_string(b.size()) + " and " +
+                           std::to_string(a.size()) + " samples)");
+    }
+    const std::size_t n = a.size();
+    std::vector<double> rows(kTrajectoryChannels * n, 0.0);
+    const std::pair<const std::vector<double>*, const std::vector<double>*> ch[kTrajectoryChannels] = {
+        {&a.current_a, &b.current_a}, {&a.speed_rad_s, &b.speed_rad_s}, {&a.theta_m_rad, &b.theta_m_rad},
+        {&a.load_torque_nm, &b.load_torque_nm}};
+    const double floors[kTrajectoryChannels] = {f.current_a, f.speed_rad_s, f.theta_rad, f.load_nm};
+    for (std::size_t c = 0; c < kTrajectoryChannels; ++c) {
+        if (!(floors[c] > 0)) continue;
+        for (std::size_t k = 0; k < n; ++k) rows[c * n + k] = ((*ch[c].first)[k] - (*ch[c].second)[k]) / floors[c];
+    }
+    return rows;
+}
 
 bool is_term_parameter(const std::string& name) {
     return name.size() > 5 && name.compare(0, 5, "term:") == 0 &&
@@ -205,7 +224,7 @@ ErrorMetrics model_error(const RunSignals& a, const RunSignals& b, const std::ve
 FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
                               const std::vector<std::string>& names, const std::vector<char>& mask,
                               double fsj_base_nm, std::size_t window_samples, const sim::EmaParams* reference,
-                              int max_iterations) {
+                              int max_iterations, const NoiseFloor* trajectory_floor) {
     FitResult fr;
     // Rows: sums of the torque residual over windows of up to kFitWindowSamples consecutive masked
     // samples (the derivative noise of eq. 7 telescopes in a window sum).
@@ -217,10 +236,16 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
         }
         windows.back().push_back(k);
     }
-    const auto m = static_cast<Eigen::Index>(windows.size());
+    const auto m = static_cast<Eigen::Index>(trajectory_floor != nullptr ? kTrajectoryChannels * measured.size()
+                                                                         : windows.size());
     const auto np = static_cast<Eigen::Index>(names.size());
-    // The window sums of measured minus model T_R for a re-simulated run's signals.
+    // The window sums of measured minus model T_R for a re-simulated run's signals (or the
+    // trajectory rows in noise floors).
     auto residual_of = [&](const RunSignals& sim_s) {
+        if (trajectory_floor != nullptr) {
+            const std::vector<double> rows = trajectory_rows(measured, sim_s, *trajectory_floor);
+            return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(rows.data(), static_cast<Eigen::Index>(rows.size())));
+        }
         Eigen::VectorXd e(m);
         for (Eigen::Index i = 0; i < m; ++i) {
             double sum = 0;
@@ -287,7 +312,7 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
         }
         if (extra != nullptr) *extra_e = residual_of(run_signals(runs[k]));
     };
-    fr.rows = windows.size();
+    fr.rows = static_cast<std::size_t>(m);
     std::vector<Point> current(1);
     current[0].params = start;
     Eigen::VectorXd e_reference;

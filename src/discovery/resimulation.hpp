@@ -4,6 +4,7 @@
 // J, tau) come from the Run; noise is none; nothing is read from true_* / effect_* metadata.
 #include "core/run.hpp"
 #include "discovery/run_signals.hpp"
+#include "discovery/trajectory.hpp"
 #include "emadiag/sim/ema_params.hpp"
 #include "emadiag/sim/simulator.hpp"
 
@@ -70,7 +71,8 @@ struct FittedValue {
 struct FitResult {
     sim::EmaParams params;
     std::vector<FittedValue> values;
-    double cost_start = 0, cost_end = 0;  ///< sum of squared window sums of the torque residual
+    double cost_start = 0, cost_end = 0;  ///< sum of squared rows (window sums of the torque residual, or
+                                          ///< the trajectory rows in noise floors)
     double cost_reference = 0;            ///< the same for `reference` (when given)
     std::size_t rows = 0;                 ///< window sums in the cost
     int iterations = 0;
@@ -84,11 +86,21 @@ struct FitResult {
 /// Parameters stay inside the simulator's allowed ranges; FSJ is max(fsj_base_nm, FDJ) at every
 /// trial point (the simulator needs FSJ >= FDJ; a DYN run does not identify FSJ).
 /// `window_samples` = 1 fits per sample (for a signature that changes within a window: ripple).
+/// With `trajectory_floor`, the rows are instead the trajectory of every sample, each channel in units
+/// of its noise floor (current, speed, theta, load: (measured - model) / floor), so the cost / rows is
+/// the trajectory cost of trajectory.hpp; `mask` and `window_samples` are then not used. That is the
+/// objective for an effect the torque residual barely sees (a friction impulse while the speed
+/// crosses zero, docs/discovery.md "Low-speed friction by the trajectory").
 [[nodiscard]] FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
                                             const std::vector<std::string>& names, const std::vector<char>& mask,
                                             double fsj_base_nm, std::size_t window_samples = kFitWindowSamples,
                                             const sim::EmaParams* reference = nullptr,
-                                            int max_iterations = kMaxFitIterations);
+                                            int max_iterations = kMaxFitIterations,
+                                            const NoiseFloor* trajectory_floor = nullptr);
+/// The trajectory rows of a model's signals: per channel (current, speed, theta, load) and sample,
+/// (measured - model) / floor (a floor of 0 gives rows of 0).
+[[nodiscard]] std::vector<double> trajectory_rows(const RunSignals& measured, const RunSignals& model,
+                                                  const NoiseFloor& floor);
 
 /// Term coefficients are fitted by the name "term:K", K the index in EmaParams::terms.
 [[nodiscard]] bool is_term_parameter(const std::string& name);

@@ -32,6 +32,9 @@ inline constexpr double kStructureMinExcessTheta = 5.0;
 /// Bins of the binned variance explained (equal counts).
 inline constexpr int kStructureBins = 10;
 
+/// Channels of the trajectory cost: current, speed, theta, load.
+inline constexpr std::size_t kTrajectoryChannels = 4;
+
 struct NoiseFloor {
     double current_a = 0, speed_rad_s = 0, theta_rad = 0, load_nm = 0;
     double torque_window_nm = 0;  ///< of the window means of the torque residual
