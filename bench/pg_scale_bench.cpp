@@ -20,11 +20,13 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <sstream>
 #include <string>
 #include <thread>
+#include <vector>
 
 namespace {
 
@@ -39,24 +41,38 @@ double cpu_seconds() {
     return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec) * 1e-6;
 }
 
-/// CPU seconds of the server's ended processes (the postmaster's children it has waited for: the
-/// backends, the autovacuum workers), from /proc/PID/stat of the postmaster named by the environment
-/// variable PG_POSTMASTER_PID (run_pg_bench.sh sets it); negative when unknown.
+/// Fields 3.. of /proc/PID/stat (after the command name), empty when the process is gone.
+std::vector<std::string> stat_fields(const std::string& pid) {
+    std::ifstream in("/proc/" + pid + "/stat");
+    std::string all((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const auto close = all.rfind(')');
+    if (close == std::string::npos) return {};
+    std::istringstream fields(all.substr(close + 2));
+    std::vector<std::string> out;
+    for (std::string x; fields >> x;) out.push_back(x);
+    return out;
+}
+
+/// CPU seconds of the server named by the environment variable PG_POSTMASTER_PID (run_pg_bench.sh
+/// sets it): the postmaster's ended children (its cutime + cstime: backends and autovacuum workers it
+/// has reaped) plus its live children's own CPU and their ended children's; negative when unknown.
+/// A backend that has exited but is not yet reaped is still a live entry here, so the sync's backend
+/// counts whether or not the postmaster has waited for it (the count of reaped children alone missed it).
 double server_cpu_seconds() {
     const char* pid = std::getenv("PG_POSTMASTER_PID");
     if (pid == nullptr) return -1;
-    std::ifstream in(std::string("/proc/") + pid + "/stat");
-    std::string all((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    const auto close = all.rfind(')');
-    if (close == std::string::npos) return -1;
-    std::istringstream fields(all.substr(close + 2));  // from field 3 (state) on
-    std::string x;
-    double cutime = 0, cstime = 0;
-    for (int field = 3; field <= 17 && fields >> x; ++field) {
-        if (field == 16) cutime = std::stod(x);
-        if (field == 17) cstime = std::stod(x);
+    const double hz = static_cast<double>(sysconf(_SC_CLK_TCK));
+    const auto pm = stat_fields(pid);
+    if (pm.size() < 15) return -1;
+    double ticks = std::stod(pm[13]) + std::stod(pm[14]);  // fields 16, 17: cutime, cstime
+    for (const auto& e : std::filesystem::directory_iterator("/proc")) {
+        const std::string name = e.path().filename().string();
+        if (name.empty() || name.find_first_not_of("0123456789") != std::string::npos || name == pid) continue;
+        const auto f = stat_fields(name);
+        if (f.size() < 15 || f[1] != pid) continue;  // field 4: the parent
+        ticks += std::stod(f[11]) + std::stod(f[12]) + std::stod(f[13]) + std::stod(f[14]);  // fields 14-17
     }
-    return (cutime + cstime) / static_cast<double>(sysconf(_SC_CLK_TCK));
+    return ticks / hz;
 }
 
 /// The server's record source with the wall time of every call added up: what a report spends
@@ -153,7 +169,7 @@ int main(int argc, char** argv) {
                 std::this_thread::sleep_for(std::chrono::milliseconds(200));
             }
             const double server = server_cpu_seconds() - s0;
-            std::printf("  server CPU of the sync: %.1f s (%.0f us/session, %.0f sessions per server CPU-second); client + server "
+            std::printf("  server CPU during the sync (all its processes): %.1f s (%.0f us/session, %.0f sessions per server CPU-second); client + server "
                         "%.0f sessions per CPU-second\n",
                         server, server / pushed * 1e6, pushed / server, pushed / (server + sync_cpu));
         }

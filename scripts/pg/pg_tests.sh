@@ -161,6 +161,14 @@ check_refused "INSERT of a finding into station_a's session posing as station_a"
   "$(st station_b "INSERT INTO findings(session_id, station_role, parameter, estimator, limit_kind, status) VALUES ($a_sid, 'station_a', 'X', 'physics', 'none', 'WITHIN')")"
 check_refused "INSERT of a session under station_a's station identity" "violates foreign key constraint \"test_sessions_station_uuid_station_role_fkey\"" \
   "$(st station_b "INSERT INTO test_sessions(session_uuid, station_uuid, station_session_id, tail_number, phase, started_utc, verdict, prev_sha256, content_sha256) SELECT gen_random_uuid(), station_uuid, 999999, 'N1EM', 'pre-flight', '2027-01-01T00:00:00Z', 'SERVICEABLE', '', repeat('0', 64) FROM stations WHERE station_role = 'station_a'")"
+check_refused "INSERT of a session of a tail the fleet does not know" "violates foreign key constraint \"test_sessions_tail_number_fkey\"" \
+  "$(st station_b "INSERT INTO test_sessions(session_uuid, station_uuid, station_session_id, tail_number, phase, started_utc, verdict, prev_sha256, content_sha256) SELECT gen_random_uuid(), station_uuid, 999999, 'N0NE', 'pre-flight', '2027-01-01T00:00:00Z', 'SERVICEABLE', '', repeat('0', 64) FROM stations WHERE station_role = 'station_b'")"
+# Schema 4: a session's summary terms go in with the session; more terms for a session already summed are refused.
+series_before=$(admin -c "SELECT md5(string_agg(t::text, '' ORDER BY tail_number, position, actuator_serial, parameter)) FROM series_stats t")
+check_refused "INSERT of summary terms for its own session already synced" "violates foreign key constraint \"session_measurements_session_check\"" \
+  "$(st station_b "INSERT INTO session_measurements(session_id, ordinal, sign, of_session_id, tail_number, position, actuator_serial, parameter, days, w, wy, wyy, value, std_error, limit_kind) SELECT session_id, 99, 1, session_id, tail_number, position, actuator_serial, 'FDJ_Nm', 20000, 1, 1, 1, 1, 1, 'none' FROM test_sessions WHERE session_id = $b_sid")"
+[ "$series_before" = "$(admin -c "SELECT md5(string_agg(t::text, '' ORDER BY tail_number, position, actuator_serial, parameter)) FROM series_stats t")" ] &&
+  pass "the fleet summary is unchanged after the refused terms" || fail "series_stats changed by refused terms"
 check_refused "INSERT of a finding into its own session under another tail" "violates foreign key constraint \"findings_session_check\"" \
   "$(st station_b "INSERT INTO findings(session_id, parameter, estimator, limit_kind, status, tail_number) VALUES ($b_sid, 'Z', 'physics', 'none', 'WITHIN', 'N3EM')")"
 # A finding as a sync older than schema 3 sends it (no tail): accepted, its tail taken from its session.

@@ -4,7 +4,7 @@
 # starts a temporary PostgreSQL server (run_pg_tests.sh --run), and runs pg_scale_bench: sync rate,
 # database size, report and fleet times from the server.
 #   scripts/pg/run_pg_bench.sh [TAILS [DAYS [BUILD_DIR]]]     (defaults 1000 730 build)
-#   PG_BENCH_STATION=FILE: use (a copy of) that station file instead of writing one; PG_BENCH_BATCH: sessions per transaction.
+#   PG_BENCH_STATION=FILE: use (a copy of) that station file instead of writing one; PG_BENCH_BATCH: sessions per transaction (default 50000).
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
@@ -31,7 +31,7 @@ psql -X -q "postgresql:///postgres?host=$PGSOCK&user=fleet_admin" -c "CREATE DAT
 pw="$(head -c 18 /dev/urandom | base64 | tr -d '/+=')"
 export PGPASSFILE="$PGWORK/pgpass"; (umask 077; echo "*:*:*:station_bench:$pw" > "$PGPASSFILE")
 psql -X -q "postgresql:///postgres?host=$PGSOCK&user=fleet_admin" <<< "ALTER ROLE station_bench PASSWORD '$pw'"
-PG_POSTMASTER_PID="$(head -1 "$PGWORK/data/postmaster.pid")" "$build/bench/pg_scale_bench" "$station" "postgresql:///fleet?host=$PGSOCK&user=station_bench" "${PG_BENCH_BATCH:-10000}" F-W0000 \
+PG_POSTMASTER_PID="$(head -1 "$PGWORK/data/postmaster.pid")" "$build/bench/pg_scale_bench" "$station" "postgresql:///fleet?host=$PGSOCK&user=station_bench" "${PG_BENCH_BATCH:-50000}" F-W0000 \
   "postgresql:///fleet?host=$PGSOCK&user=fleet_admin"
 # The server's CPU (its backends, ended by now; the machine may be shared, so wall times also count waiting).
 pm="$(head -1 "$PGWORK/data/postmaster.pid")"

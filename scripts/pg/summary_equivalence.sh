@@ -2,7 +2,7 @@
 # The summary tables kept per statement (pg_schema/002, and 003's window sums) against those kept
 # per row (pg_schema/001, the station's add_to_summaries expression for expression): the same random
 # sessions and measurements (signs -1 and +1, cycles or none, dates in any order, new and existing
-# series and positions) inserted batch by batch into a schema-1, a schema-2 and a schema-3 database
+# series and positions) inserted batch by batch into a schema-1, a schema-2 and a newest-schema (3 and on) database
 # must leave identical series_stats and position_status, every double's shortest exact text equal. Run by pg_tests.sh on
 # the server run_pg_tests.sh started:   summary_equivalence.sh SEED   (SEED in [-1, 1], printed)
 set -euo pipefail
@@ -10,8 +10,9 @@ S="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../maintenance_db/pg_schema" && pwd)"
 a() { psql -X -q -At -v ON_ERROR_STOP=1 "postgresql:///$1?host=$PGSOCK&user=fleet_admin" "${@:2}"; }
 a postgres -c "CREATE DATABASE ta" -c "CREATE DATABASE tb" -c "CREATE DATABASE tc" > /dev/null
 a ta -f $S/001_fleet.sql; a tb -f $S/001_fleet.sql; a tb -f $S/002_batch_summaries.sql
-a tc -f $S/001_fleet.sql; a tc -f $S/002_batch_summaries.sql; a tc -f $S/003_statement_checks.sql
-# The terms go in before their sessions here: schema 3's check that each term's session exists is off.
+# tc: every version from 3 on (the newest summary statement; 004 changed the tables' storage, not the sums).
+for f in $(ls "$S"/*.sql | sort); do a tc -f "$f"; done
+# The terms go in before their sessions here: the check that each term's session exists (schema 3 on) is off.
 a tc -c "ALTER TABLE session_measurements DISABLE TRIGGER session_measurements_session_check" > /dev/null
 seed=${1:-0.42}
 for db in ta tb tc; do
@@ -55,5 +56,5 @@ for t in series_stats position_status; do
     y=$(a $db -c "SELECT count(*), md5(string_agg(t::text, '|' ORDER BY t::text)) FROM $t t")
     [ "$x" = "$y" ] || { echo "$t differs (seed $seed): per row $x, per statement ($db) $y"; diff <(a ta -c "SELECT * FROM $t ORDER BY 1,2,3") <(a $db -c "SELECT * FROM $t ORDER BY 1,2,3") | head -10; exit 1; }
   done
-  echo "$t: ${x%%|*} rows, identical per row (schema 1) and per statement (schemas 2 and 3) (md5 ${x#*|})"
+  echo "$t: ${x%%|*} rows, identical per row (schema 1) and per statement (schema 2 and schema $(ls "$S"/*.sql | wc -l)) (md5 ${x#*|})"
 done

@@ -1,4 +1,4 @@
-// emadiag sync --db station.db --to postgresql://HOST/DB [--batch 2000] [--verbose]:
+// emadiag sync --db station.db --to postgresql://HOST/DB [--batch 20000] [--verbose]:
 //   pushes every session of the station the fleet server does not have yet (maintenance_db/pg,
 //   docs/fleet-server.md); whole sessions per PostgreSQL transaction, recorded in the station file.
 // emadiag fleet-server --to postgresql://HOST/DB [--add-station ROLE]...:
@@ -21,7 +21,7 @@ namespace {
 struct SyncCliOptions {
     std::string db = "maintenance.db";
     std::string to;
-    std::size_t batch = 2000;
+    std::size_t batch = 20000;
     bool verbose = false;
 };
 

@@ -74,7 +74,7 @@ int migrate_fleet_server(PgConnection& pg);
 void add_station_role(PgConnection& pg, const std::string& role);
 
 struct SyncOptions {
-    std::size_t batch_sessions = 2000;  ///< whole sessions per PostgreSQL transaction
+    std::size_t batch_sessions = 20000;  ///< whole sessions per PostgreSQL transaction (docs/fleet-server.md: why so many)
     int max_retries = 20;               ///< on deadlock or a concurrent sync of the same file
     std::function<void(const std::string&)> progress;  ///< one line per committed batch (may be empty)
 };
