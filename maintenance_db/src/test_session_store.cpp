@@ -209,8 +209,17 @@ StoredFinding read_finding(const Statement& st, int c) {
 
 constexpr const char* kFindingColumns = "f.parameter, f.estimator, f.value, f.std_error, f.limit_value, f.limit_kind, f.status, f.note";
 
-std::vector<StoredFinding> load_findings(Database& db, std::int64_t session_id) {
-    Statement st(db, std::string("SELECT ") + kFindingColumns + " FROM findings f WHERE session_id = ? ORDER BY parameter, estimator");
+/// The layout of the findings table: clustered by tail (schema version 6 on) or keyed by session
+/// alone (versions 2 to 5: only the sealing of the version-3 migration reads it so).
+enum class FindingsLayout { ByTail, BySession };
+
+std::vector<StoredFinding> load_findings(Database& db, std::int64_t session_id, FindingsLayout layout = FindingsLayout::ByTail) {
+    // Version 6 keys a finding by its session's tail first: found through the session's row.
+    Statement st(db, std::string("SELECT ") + kFindingColumns +
+                         (layout == FindingsLayout::ByTail
+                              ? " FROM test_sessions s JOIN findings f ON f.tail_number = s.tail_number AND f.session_id = s.session_id "
+                                "WHERE s.session_id = ? ORDER BY f.parameter, f.estimator"
+                              : " FROM findings f WHERE f.session_id = ? ORDER BY f.parameter, f.estimator"));
     st.bind(1, session_id);
     std::vector<StoredFinding> out;
     while (st.step()) out.push_back(read_finding(st, 0));
@@ -246,7 +255,8 @@ std::vector<StoredTestSession> list_where(Database& db, const std::string& where
         // findings' primary key deliver that order, so SQLite sorts nothing, and the rows arrive
         // session by session (the map is a fallback for a session met out of turn).
         Statement st(db, std::string("SELECT f.session_id, ") + kFindingColumns +
-                             " FROM test_sessions s JOIN findings f ON f.session_id = s.session_id WHERE " + where +
+                             " FROM test_sessions s JOIN findings f ON f.tail_number = s.tail_number AND f.session_id = s.session_id WHERE " +
+                             where +
                              " ORDER BY s.started_utc, s.session_id, f.parameter, f.estimator");
         st.bind(1, value);
         std::size_t at = 0;
@@ -352,6 +362,8 @@ struct Batch {
     std::unordered_map<std::string, std::string> position_ata;  ///< position -> its ATA reference, checked or registered
     /// The last limits text hashed and its SHA-256 (a fleet's sessions share their limits).
     std::string limits_json, limits_sha256;
+    /// The id the next stored session gets (0: not read yet in this transaction).
+    std::int64_t next_session_id = 0;
     /// The insert statements, fetched from the connection's cache once per transaction.
     Statement *insert_aircraft = nullptr, *insert_session = nullptr, *insert_finding = nullptr, *insert_artifact = nullptr;
 };
@@ -735,13 +747,23 @@ SessionReceipt insert_session(Database& db, Batch& b, const StoredTestSession& s
     }
     const std::string prev_sha256 = chain_head(db, b, s.tail_number);
     const std::string content = content_sha256(s, limits_sha256, prev_sha256);
+    if (b.next_session_id == 0) {
+        // session_id is no rowid (schema/006): the next id above every one used so far, including a
+        // tail's last session recorded in chain_heads (an id is never given twice).
+        Statement& next = db.cached(
+            "SELECT max(coalesce((SELECT max(session_id) FROM test_sessions), 0), coalesce((SELECT max(session_id) FROM chain_heads), 0)) + 1");
+        next.step();
+        b.next_session_id = next.column_int(0);
+        next.reset();
+    }
+    const std::int64_t session_id = b.next_session_id++;
 
     // The texts are bound without a copy (bind_view): the session, the batch's limits hash and the
     // two local hashes outlive the statement's run below.
     Statement& ins = prepared(db, b.insert_session,
         "INSERT INTO test_sessions(tail_number, actuator_serial, phase, started_utc, tool_version, verdict, verdict_note, limits_json, "
         "position, cycles, hours_h, operator_id, technician_name, technician_certificate, work_performed, source, limits_sha256, "
-        "amends_session_id, correction_reason, prev_sha256, content_sha256) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
+        "amends_session_id, correction_reason, prev_sha256, content_sha256, session_id) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
     ins.bind_view(1, s.tail_number).bind_view(2, s.actuator_serial).bind_view(3, s.phase).bind_view(4, s.started_utc);
     ins.bind_view(5, s.tool_version).bind_view(6, s.verdict).bind_view(7, s.verdict_note).bind_view(8, s.limits_json);
     if (s.position) {
@@ -754,22 +776,22 @@ SessionReceipt insert_session(Database& db, Batch& b, const StoredTestSession& s
     ins.bind_view(12, s.operator_id).bind_view(13, s.technician_name).bind_view(14, s.technician_certificate).bind_view(15, s.work_performed);
     ins.bind_view(16, s.source).bind_view(17, limits_sha256);
     bind_optional(ins, 18, s.amends_session_id);
-    ins.bind_view(19, s.correction_reason).bind_view(20, prev_sha256).bind_view(21, content);
+    ins.bind_view(19, s.correction_reason).bind_view(20, prev_sha256).bind_view(21, content).bind(22, session_id);
     ins.run();
     SessionReceipt receipt;
-    receipt.session_id = db.last_insert_id();
+    receipt.session_id = session_id;
     receipt.content_sha256 = content;
 
     for (const auto& run : s.runs) (void)detail::insert_run(db, run, receipt.session_id);
     for (const auto& f : s.findings) {
         Statement& fnd = prepared(db, b.insert_finding,
-            "INSERT INTO findings(session_id, parameter, estimator, value, std_error, limit_value, limit_kind, status, note) "
-            "VALUES (?,?,?,?,?,?,?,?,?)");
+            "INSERT INTO findings(session_id, parameter, estimator, value, std_error, limit_value, limit_kind, status, note, tail_number) "
+            "VALUES (?,?,?,?,?,?,?,?,?,?)");
         fnd.bind(1, receipt.session_id).bind_view(2, f.parameter).bind_view(3, f.estimator);
         bind_optional(fnd, 4, f.value);
         bind_optional(fnd, 5, f.std_error);
         bind_optional(fnd, 6, f.limit_value);
-        fnd.bind_view(7, f.limit_kind).bind_view(8, f.status).bind_view(9, f.note).run();
+        fnd.bind_view(7, f.limit_kind).bind_view(8, f.status).bind_view(9, f.note).bind_view(10, s.tail_number).run();
     }
     for (const auto& a : s.artifacts) {
         Statement& art = prepared(db, b.insert_artifact, "INSERT INTO session_artifacts(session_id, role, name, sha256) VALUES (?,?,?,?)");
@@ -838,16 +860,20 @@ std::vector<SessionReceipt> store_sessions(Database& db, const std::vector<Store
 
 std::int64_t store_test_session(Database& db, const StoredTestSession& session) { return store_session(db, session).session_id; }
 
-StoredTestSession load_test_session(Database& db, std::int64_t session_id) {
+namespace {
+StoredTestSession load_session(Database& db, std::int64_t session_id, FindingsLayout layout) {
     Statement st(db, std::string("SELECT ") + kSessionColumns + " WHERE s.session_id = ?");
     st.bind(1, session_id);
     if (!st.step()) throw DbError("no test session with id " + std::to_string(session_id) + " in " + db.path(), DbErrorKind::Invalid);
     StoredTestSession s = read_session_row(st);
     for (const auto& listed : detail::session_runs(db, session_id)) s.runs.push_back(load_run(db, listed.run_id));
-    s.findings = load_findings(db, session_id);
+    s.findings = load_findings(db, session_id, layout);
     s.artifacts = load_artifacts(db, session_id);
     return s;
 }
+}  // namespace
+
+StoredTestSession load_test_session(Database& db, std::int64_t session_id) { return load_session(db, session_id, FindingsLayout::ByTail); }
 
 std::vector<StoredTestSession> list_test_sessions(Database& db, const std::string& tail_number) {
     check_tail_number(tail_number);
@@ -876,7 +902,7 @@ void detail::seal_sessions_before_v3(Database& db) {
     }
     Batch b;
     for (const auto id : ids) {
-        StoredTestSession s = load_test_session(db, id);
+        StoredTestSession s = load_session(db, id, FindingsLayout::BySession);  // the version-3 layout
         s.limits_sha256 = sha256_hex(s.limits_json);
         s.prev_sha256 = chain_head(db, b, s.tail_number);
         s.content_sha256 = session_content_sha256(s, s.prev_sha256);
