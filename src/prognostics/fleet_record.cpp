@@ -208,8 +208,9 @@ FleetRecord build_fleet_record(db::RecordSource& database, const std::string& ta
     r.database = database.name();
     r.options = options;
     db::check_tail_number(tail_number);
-    // Rows and findings: the report shows neither artifacts nor runs.
-    const db::SessionListParts rows_and_findings{false, false};
+    // Rows and findings: the report shows neither artifacts nor runs, nor the limits text and the
+    // chain links of each session (only its content hash).
+    const db::SessionListParts rows_and_findings{false, false, false};
     auto all = database.sessions_of_tail(tail_number, rows_and_findings);
     r.sessions_total = static_cast<std::int64_t>(all.size());
     std::set<std::int64_t> amended;
