@@ -310,13 +310,16 @@ std::vector<StoredTestSession> list_of_tail(Database& db, const std::string& tai
         std::size_t at = 0;
         StoredTestSession* session = nullptr;
         std::int64_t session_id = -1;
+        std::size_t last_count = 0;  // sessions of a tail mostly have as many findings as the one before
         while (st.step()) {
             const std::int64_t id = st.column_int(0);
             if (id != session_id) {
+                if (session != nullptr) last_count = session->findings.size();
                 while (at < by_id.size() && by_id[at].first < id) ++at;
                 // A finding whose session is not this tail's: its session lies elsewhere (changed
                 // outside the tool); list_where's join would not show it either.
                 session = at < by_id.size() && by_id[at].first == id ? &out[by_id[at].second] : nullptr;
+                if (session != nullptr) session->findings.reserve(last_count);
                 session_id = id;
             }
             if (session != nullptr) session->findings.push_back(read_finding(st, 1));
