@@ -19,6 +19,9 @@ constexpr char kSqliteHeader[] = "SQLite format 3";  // + its NUL: 16 bytes
 constexpr std::size_t kSqliteHeaderBytes = 16;
 /// The schema version whose migration is followed by the sealing of earlier sessions (hash chain).
 constexpr int kSealVersion = 3;
+/// The schema version that rebuilds test_sessions and findings clustered by tail: the migration
+/// code checks that both keep every row.
+constexpr int kClusterVersion = 6;
 /// The tables a store updates in place (upserts) and the small ones it reads before writing: the
 /// bounded check at open reads them whole (IntegrityScope::Open).
 constexpr const char* kTablesUpdatedInPlace[] = {"aircraft", "positions", "chain_heads", "series_stats", "position_status"};
@@ -256,8 +259,26 @@ void Database::migrate() {
     }
     for (int v = have; v < newest; ++v) {
         Transaction tx(*this);
+        const auto count_rows = [this](const char* table) {
+            Statement st(*this, std::string("SELECT count(*) FROM ") + table);
+            st.step();
+            return st.column_int(0);
+        };
+        std::int64_t sessions_before = 0, findings_before = 0;
+        if (v + 1 == kClusterVersion) {
+            sessions_before = count_rows("test_sessions");
+            findings_before = count_rows("findings");
+        }
         exec(kSchemaMigrations[v]);
         if (v + 1 == kSealVersion) detail::seal_sessions_before_v3(*this);
+        if (v + 1 == kClusterVersion) {
+            const std::int64_t sessions_after = count_rows("test_sessions"), findings_after = count_rows("findings");
+            if (sessions_after != sessions_before || findings_after != findings_before)
+                throw DbError("database " + path_ + ": migration to version " + std::to_string(v + 1) + " would keep " +
+                              std::to_string(sessions_after) + " of " + std::to_string(sessions_before) + " test sessions and " +
+                              std::to_string(findings_after) + " of " + std::to_string(findings_before) +
+                              " findings (a finding without its session?); nothing was changed");
+        }
         exec("PRAGMA user_version = " + std::to_string(v + 1));
         if (v + 1 == newest) {
             Statement fk(*this, "PRAGMA foreign_key_check");

@@ -209,8 +209,17 @@ StoredFinding read_finding(const Statement& st, int c) {
 
 constexpr const char* kFindingColumns = "f.parameter, f.estimator, f.value, f.std_error, f.limit_value, f.limit_kind, f.status, f.note";
 
-std::vector<StoredFinding> load_findings(Database& db, std::int64_t session_id) {
-    Statement st(db, std::string("SELECT ") + kFindingColumns + " FROM findings f WHERE session_id = ? ORDER BY parameter, estimator");
+/// The layout of the findings table: clustered by tail (schema version 6 on) or keyed by session
+/// alone (versions 2 to 5: only the sealing of the version-3 migration reads it so).
+enum class FindingsLayout { ByTail, BySession };
+
+std::vector<StoredFinding> load_findings(Database& db, std::int64_t session_id, FindingsLayout layout = FindingsLayout::ByTail) {
+    // Version 6 keys a finding by its session's tail first: found through the session's row.
+    Statement st(db, std::string("SELECT ") + kFindingColumns +
+                         (layout == FindingsLayout::ByTail
+                              ? " FROM test_sessions s JOIN findings f ON f.tail_number = s.tail_number AND f.session_id = s.session_id "
+                                "WHERE s.session_id = ? ORDER BY f.parameter, f.estimator"
+                              : " FROM findings f WHERE f.session_id = ? ORDER BY f.parameter, f.estimator"));
     st.bind(1, session_id);
     std::vector<StoredFinding> out;
     while (st.step()) out.push_back(read_finding(st, 0));
@@ -222,6 +231,115 @@ std::vector<StoredArtifact> load_artifacts(Database& db, std::int64_t session_id
     st.bind(1, session_id);
     std::vector<StoredArtifact> out;
     while (st.step()) out.push_back({st.column_text(0), st.column_text(1), st.column_text(2)});
+    return out;
+}
+
+/// A tail's sessions, oldest first, with their findings: two key ranges of the tables clustered by
+/// tail (schema/006), read in their stored order. The positions (a small table) are read once, not
+/// joined per session; limits_json and the two hashes of the chain are read only when asked for.
+std::vector<StoredTestSession> list_of_tail(Database& db, const std::string& tail_number, const SessionListParts& parts) {
+    std::vector<StoredTestSession> out;
+    std::unordered_map<std::string, std::pair<std::string, std::string>> positions;
+    {
+        Statement st(db, "SELECT position, ata_reference, description FROM positions");
+        while (st.step()) positions.emplace(st.column_text(0), std::make_pair(st.column_text(1), st.column_text(2)));
+    }
+    {
+        // Room for every session at once: the tail's count from its chain head (a hint only, bounded).
+        constexpr std::int64_t kMaxReserved = std::int64_t{1} << 20;
+        Statement count(db, "SELECT sessions FROM chain_heads WHERE tail_number = ?");
+        count.bind(1, tail_number);
+        if (count.step() && count.column_int(0) > 0) out.reserve(static_cast<std::size_t>(std::min(count.column_int(0), kMaxReserved)));
+    }
+    {
+        Statement st(db, std::string("SELECT session_id, actuator_serial, phase, started_utc, tool_version, verdict, verdict_note, position, "
+                                     "cycles, hours_h, operator_id, technician_name, technician_certificate, work_performed, source, "
+                                     "amends_session_id, correction_reason, content_sha256") +
+                             (parts.limits_and_links ? ", limits_json, limits_sha256, prev_sha256" : "") +
+                             " FROM test_sessions WHERE tail_number = ? ORDER BY tail_number, started_utc, session_id");
+        st.bind(1, tail_number);
+        while (st.step()) {
+            StoredTestSession& s = out.emplace_back();
+            s.session_id = st.column_int(0);
+            s.tail_number = tail_number;
+            s.actuator_serial = st.column_view(1);
+            s.phase = st.column_view(2);
+            s.started_utc = st.column_view(3);
+            s.tool_version = st.column_view(4);
+            s.verdict = st.column_view(5);
+            s.verdict_note = st.column_view(6);
+            if (!st.column_is_null(7)) {
+                s.position = st.column_view(7);
+                // As the LEFT JOIN of list_where: a position missing from the table gives ''.
+                if (const auto it = positions.find(*s.position); it != positions.end()) {
+                    s.position_ata = it->second.first;
+                    s.position_description = it->second.second;
+                }
+            }
+            if (!st.column_is_null(8)) s.cycles = st.column_int(8);
+            if (!st.column_is_null(9)) s.hours_h = st.column_double(9);
+            s.operator_id = st.column_view(10);
+            s.technician_name = st.column_view(11);
+            s.technician_certificate = st.column_view(12);
+            s.work_performed = st.column_view(13);
+            s.source = st.column_view(14);
+            if (!st.column_is_null(15)) s.amends_session_id = st.column_int(15);
+            s.correction_reason = st.column_view(16);
+            s.content_sha256 = st.column_view(17);
+            if (parts.limits_and_links) {
+                s.limits_json = st.column_view(18);
+                s.limits_sha256 = st.column_view(19);
+                s.prev_sha256 = st.column_view(20);
+            } else {
+                s.limits_json.clear();
+            }
+        }
+    }
+    if (out.empty()) return out;
+    {
+        // The tail's findings in key order (session_id, parameter, estimator): each session's in the
+        // order load_test_session gives them. Sessions are in time order, which is session_id
+        // order unless one was stored with an earlier time than an earlier-stored one: matched by id.
+        std::vector<std::pair<std::int64_t, std::size_t>> by_id;
+        by_id.reserve(out.size());
+        for (std::size_t i = 0; i < out.size(); ++i) by_id.emplace_back(out[i].session_id, i);
+        std::sort(by_id.begin(), by_id.end());
+        Statement st(db, std::string("SELECT f.session_id, ") + kFindingColumns +
+                             " FROM findings f WHERE f.tail_number = ? ORDER BY f.tail_number, f.session_id, f.parameter, f.estimator");
+        st.bind(1, tail_number);
+        std::size_t at = 0;
+        StoredTestSession* session = nullptr;
+        std::int64_t session_id = -1;
+        std::size_t last_count = 0;  // sessions of a tail mostly have as many findings as the one before
+        while (st.step()) {
+            const std::int64_t id = st.column_int(0);
+            if (id != session_id) {
+                if (session != nullptr) last_count = session->findings.size();
+                while (at < by_id.size() && by_id[at].first < id) ++at;
+                // A finding whose session is not this tail's: its session lies elsewhere (changed
+                // outside the tool); list_where's join would not show it either.
+                session = at < by_id.size() && by_id[at].first == id ? &out[by_id[at].second] : nullptr;
+                if (session != nullptr) session->findings.reserve(last_count);
+                session_id = id;
+            }
+            if (session != nullptr) session->findings.push_back(read_finding(st, 1));
+        }
+    }
+    if (!parts.artifacts && !parts.runs) return out;
+    std::unordered_map<std::int64_t, std::size_t> index;
+    for (std::size_t i = 0; i < out.size(); ++i) index[out[i].session_id] = i;
+    if (parts.artifacts) {
+        Statement st(db, "SELECT a.session_id, a.role, a.name, a.sha256 FROM test_sessions s JOIN session_artifacts a ON a.session_id = "
+                         "s.session_id WHERE s.tail_number = ? ORDER BY a.session_id, a.role, a.name");
+        st.bind(1, tail_number);
+        while (st.step()) out[index.at(st.column_int(0))].artifacts.push_back({st.column_text(1), st.column_text(2), st.column_text(3)});
+    }
+    if (parts.runs) {
+        for (auto& r : detail::runs_where(db, "s.tail_number = ?", tail_number)) {
+            const auto it = index.find(r.session_id.value_or(-1));
+            if (it != index.end()) out[it->second].runs.push_back(std::move(r));
+        }
+    }
     return out;
 }
 
@@ -246,7 +364,8 @@ std::vector<StoredTestSession> list_where(Database& db, const std::string& where
         // findings' primary key deliver that order, so SQLite sorts nothing, and the rows arrive
         // session by session (the map is a fallback for a session met out of turn).
         Statement st(db, std::string("SELECT f.session_id, ") + kFindingColumns +
-                             " FROM test_sessions s JOIN findings f ON f.session_id = s.session_id WHERE " + where +
+                             " FROM test_sessions s JOIN findings f ON f.tail_number = s.tail_number AND f.session_id = s.session_id WHERE " +
+                             where +
                              " ORDER BY s.started_utc, s.session_id, f.parameter, f.estimator");
         st.bind(1, value);
         std::size_t at = 0;
@@ -352,6 +471,8 @@ struct Batch {
     std::unordered_map<std::string, std::string> position_ata;  ///< position -> its ATA reference, checked or registered
     /// The last limits text hashed and its SHA-256 (a fleet's sessions share their limits).
     std::string limits_json, limits_sha256;
+    /// The id the next stored session gets (0: not read yet in this transaction).
+    std::int64_t next_session_id = 0;
     /// The insert statements, fetched from the connection's cache once per transaction.
     Statement *insert_aircraft = nullptr, *insert_session = nullptr, *insert_finding = nullptr, *insert_artifact = nullptr;
 };
@@ -735,13 +856,23 @@ SessionReceipt insert_session(Database& db, Batch& b, const StoredTestSession& s
     }
     const std::string prev_sha256 = chain_head(db, b, s.tail_number);
     const std::string content = content_sha256(s, limits_sha256, prev_sha256);
+    if (b.next_session_id == 0) {
+        // session_id is no rowid (schema/006): the next id above every one used so far, including a
+        // tail's last session recorded in chain_heads (an id is never given twice).
+        Statement& next = db.cached(
+            "SELECT max(coalesce((SELECT max(session_id) FROM test_sessions), 0), coalesce((SELECT max(session_id) FROM chain_heads), 0)) + 1");
+        next.step();
+        b.next_session_id = next.column_int(0);
+        next.reset();
+    }
+    const std::int64_t session_id = b.next_session_id++;
 
     // The texts are bound without a copy (bind_view): the session, the batch's limits hash and the
     // two local hashes outlive the statement's run below.
     Statement& ins = prepared(db, b.insert_session,
         "INSERT INTO test_sessions(tail_number, actuator_serial, phase, started_utc, tool_version, verdict, verdict_note, limits_json, "
         "position, cycles, hours_h, operator_id, technician_name, technician_certificate, work_performed, source, limits_sha256, "
-        "amends_session_id, correction_reason, prev_sha256, content_sha256) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
+        "amends_session_id, correction_reason, prev_sha256, content_sha256, session_id) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
     ins.bind_view(1, s.tail_number).bind_view(2, s.actuator_serial).bind_view(3, s.phase).bind_view(4, s.started_utc);
     ins.bind_view(5, s.tool_version).bind_view(6, s.verdict).bind_view(7, s.verdict_note).bind_view(8, s.limits_json);
     if (s.position) {
@@ -754,22 +885,22 @@ SessionReceipt insert_session(Database& db, Batch& b, const StoredTestSession& s
     ins.bind_view(12, s.operator_id).bind_view(13, s.technician_name).bind_view(14, s.technician_certificate).bind_view(15, s.work_performed);
     ins.bind_view(16, s.source).bind_view(17, limits_sha256);
     bind_optional(ins, 18, s.amends_session_id);
-    ins.bind_view(19, s.correction_reason).bind_view(20, prev_sha256).bind_view(21, content);
+    ins.bind_view(19, s.correction_reason).bind_view(20, prev_sha256).bind_view(21, content).bind(22, session_id);
     ins.run();
     SessionReceipt receipt;
-    receipt.session_id = db.last_insert_id();
+    receipt.session_id = session_id;
     receipt.content_sha256 = content;
 
     for (const auto& run : s.runs) (void)detail::insert_run(db, run, receipt.session_id);
     for (const auto& f : s.findings) {
         Statement& fnd = prepared(db, b.insert_finding,
-            "INSERT INTO findings(session_id, parameter, estimator, value, std_error, limit_value, limit_kind, status, note) "
-            "VALUES (?,?,?,?,?,?,?,?,?)");
+            "INSERT INTO findings(session_id, parameter, estimator, value, std_error, limit_value, limit_kind, status, note, tail_number) "
+            "VALUES (?,?,?,?,?,?,?,?,?,?)");
         fnd.bind(1, receipt.session_id).bind_view(2, f.parameter).bind_view(3, f.estimator);
         bind_optional(fnd, 4, f.value);
         bind_optional(fnd, 5, f.std_error);
         bind_optional(fnd, 6, f.limit_value);
-        fnd.bind_view(7, f.limit_kind).bind_view(8, f.status).bind_view(9, f.note).run();
+        fnd.bind_view(7, f.limit_kind).bind_view(8, f.status).bind_view(9, f.note).bind_view(10, s.tail_number).run();
     }
     for (const auto& a : s.artifacts) {
         Statement& art = prepared(db, b.insert_artifact, "INSERT INTO session_artifacts(session_id, role, name, sha256) VALUES (?,?,?,?)");
@@ -838,20 +969,24 @@ std::vector<SessionReceipt> store_sessions(Database& db, const std::vector<Store
 
 std::int64_t store_test_session(Database& db, const StoredTestSession& session) { return store_session(db, session).session_id; }
 
-StoredTestSession load_test_session(Database& db, std::int64_t session_id) {
+namespace {
+StoredTestSession load_session(Database& db, std::int64_t session_id, FindingsLayout layout) {
     Statement st(db, std::string("SELECT ") + kSessionColumns + " WHERE s.session_id = ?");
     st.bind(1, session_id);
     if (!st.step()) throw DbError("no test session with id " + std::to_string(session_id) + " in " + db.path(), DbErrorKind::Invalid);
     StoredTestSession s = read_session_row(st);
     for (const auto& listed : detail::session_runs(db, session_id)) s.runs.push_back(load_run(db, listed.run_id));
-    s.findings = load_findings(db, session_id);
+    s.findings = load_findings(db, session_id, layout);
     s.artifacts = load_artifacts(db, session_id);
     return s;
 }
+}  // namespace
+
+StoredTestSession load_test_session(Database& db, std::int64_t session_id) { return load_session(db, session_id, FindingsLayout::ByTail); }
 
 std::vector<StoredTestSession> list_test_sessions(Database& db, const std::string& tail_number) {
     check_tail_number(tail_number);
-    return list_where(db, "s.tail_number = ?", tail_number);
+    return list_of_tail(db, tail_number, SessionListParts{});
 }
 
 std::vector<StoredTestSession> list_sessions_of_serial(Database& db, const std::string& actuator_serial) {
@@ -860,7 +995,7 @@ std::vector<StoredTestSession> list_sessions_of_serial(Database& db, const std::
 
 std::vector<StoredTestSession> list_test_sessions(Database& db, const std::string& tail_number, const SessionListParts& parts) {
     check_tail_number(tail_number);
-    return list_where(db, "s.tail_number = ?", tail_number, parts);
+    return list_of_tail(db, tail_number, parts);
 }
 
 std::vector<StoredTestSession> list_sessions_of_serial(Database& db, const std::string& actuator_serial, const SessionListParts& parts) {
@@ -876,7 +1011,7 @@ void detail::seal_sessions_before_v3(Database& db) {
     }
     Batch b;
     for (const auto id : ids) {
-        StoredTestSession s = load_test_session(db, id);
+        StoredTestSession s = load_session(db, id, FindingsLayout::BySession);  // the version-3 layout
         s.limits_sha256 = sha256_hex(s.limits_json);
         s.prev_sha256 = chain_head(db, b, s.tail_number);
         s.content_sha256 = session_content_sha256(s, s.prev_sha256);

@@ -208,8 +208,9 @@ FleetRecord build_fleet_record(db::RecordSource& database, const std::string& ta
     r.database = database.name();
     r.options = options;
     db::check_tail_number(tail_number);
-    // Rows and findings: the report shows neither artifacts nor runs.
-    const db::SessionListParts rows_and_findings{false, false};
+    // Rows and findings: the report shows neither artifacts nor runs, nor the limits text and the
+    // chain links of each session (only its content hash).
+    const db::SessionListParts rows_and_findings{false, false, false};
     auto all = database.sessions_of_tail(tail_number, rows_and_findings);
     r.sessions_total = static_cast<std::int64_t>(all.size());
     std::set<std::int64_t> amended;
@@ -224,11 +225,9 @@ FleetRecord build_fleet_record(db::RecordSource& database, const std::string& ta
                 r.chain_head_sha256 = s.content_sha256;
             }
     }
-    std::vector<db::StoredTestSession> current;
-    current.reserve(all.size());
-    for (auto& s : all)
-        if (!amended.count(s.session_id)) current.push_back(std::move(s));
-    all.clear();
+    // The sessions no correction replaces, in place (no second vector of every session).
+    std::vector<db::StoredTestSession>& current = all;
+    if (!amended.empty()) std::erase_if(current, [&amended](const db::StoredTestSession& s) { return amended.count(s.session_id) > 0; });
     r.installations = database.installations_of_tail(tail_number);
     r.open_findings = database.discovery_findings(tail_number, true);
 
@@ -238,6 +237,11 @@ FleetRecord build_fleet_record(db::RecordSource& database, const std::string& ta
     // Per position: the history across serials; the trends of the serial installed now. (Each
     // session is moved to its position: the serial views below copy from the positions.)
     std::map<std::string, std::vector<db::StoredTestSession>> by_position;
+    {
+        std::map<std::string, std::size_t> counts;
+        for (const auto& s : current) ++counts[s.position.value_or(kNoPosition)];
+        for (const auto& [position, n] : counts) by_position[position].reserve(n);
+    }
     for (auto& s : current) {
         const std::string position = s.position.value_or(kNoPosition);
         by_position[position].push_back(std::move(s));
@@ -273,21 +277,28 @@ FleetRecord build_fleet_record(db::RecordSource& database, const std::string& ta
         std::set<std::int64_t> amended_here;
         v.installations = database.installations_of_serial(serial);
         const bool only_here = !database.serial_seen_elsewhere(serial, tail_number);
-        std::vector<db::StoredTestSession> of_serial;
         if (only_here) {
+            // From the positions' sessions: sorted as pointers, each kept session copied once.
+            std::vector<const db::StoredTestSession*> of_serial;
             for (const auto& pv : r.positions)
                 for (const auto& s : pv.sessions)
-                    if (s.actuator_serial == serial) of_serial.push_back(s);
-            std::sort(of_serial.begin(), of_serial.end(), [](const auto& a, const auto& b) {
-                return std::tie(a.started_utc, a.session_id) < std::tie(b.started_utc, b.session_id);
+                    if (s.actuator_serial == serial) of_serial.push_back(&s);
+            std::sort(of_serial.begin(), of_serial.end(), [](const auto* a, const auto* b) {
+                return std::tie(a->started_utc, a->session_id) < std::tie(b->started_utc, b->session_id);
             });
+            for (const auto* s : of_serial)
+                if (s->amends_session_id) amended_here.insert(*s->amends_session_id);
+            sessions.reserve(of_serial.size());
+            for (const auto* s : of_serial)
+                if (!amended_here.count(s->session_id)) sessions.push_back(*s);
         } else {
-            of_serial = database.sessions_of_serial(serial, rows_and_findings);
+            std::vector<db::StoredTestSession> of_serial = database.sessions_of_serial(serial, rows_and_findings);
+            for (const auto& s : of_serial)
+                if (s.amends_session_id) amended_here.insert(*s.amends_session_id);
+            sessions.reserve(of_serial.size());
+            for (auto& s : of_serial)
+                if (!amended_here.count(s.session_id)) sessions.push_back(std::move(s));
         }
-        for (const auto& s : of_serial)
-            if (s.amends_session_id) amended_here.insert(*s.amends_session_id);
-        for (auto& s : of_serial)
-            if (!amended_here.count(s.session_id)) sessions.push_back(std::move(s));
         v.current_place = sessions.back().tail_number + " " + sessions.back().position.value_or(kNoPosition);
         v.last_verdict = sessions.back().verdict;
         std::set<std::string> places;

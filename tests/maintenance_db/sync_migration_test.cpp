@@ -1,9 +1,11 @@
 // Schema version 4 -> 5 (schema/005_sync.sql): the station identity and the sync record are added to
-// a file with sessions, which stay as they were; every file gets its own station UUID.
+// a file with sessions, which stay as they were; every file gets its own station UUID. (A version-4
+// file then takes version 6 too: schema/006, tests in cluster_migration_test.cpp.)
 #include "emadiag/db/database.hpp"
 #include "emadiag/db/db_error.hpp"
 #include "emadiag/db/record_store.hpp"
 #include "emadiag/db/test_session_store.hpp"
+#include "older_version_file.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -44,17 +46,27 @@ std::string uuid_of(Database& db) {
 }
 
 TEST(SyncMigration, AVersion4FileGetsAStationIdentityAndKeepsEverySession) {
-    const TempFile file;
+    const TempFile newest;
+    const std::string v4_path = newest.path + ".v4";
+    std::filesystem::remove(v4_path);
+    struct Remove {
+        std::string path;
+        ~Remove() { std::filesystem::remove(path); }
+    } const remove_v4{v4_path};
     std::string sha_before;
     {
-        Database db(file.path);
+        Database db(newest.path);
         (void)store_session(db, session("2026-01-01T08:00:00Z"));
         sha_before = store_session(db, session("2026-02-01T08:00:00Z")).content_sha256;
-        // Back to the file as schema version 4 left it: without 005's tables.
-        db.exec("DROP TABLE synced_sessions; DROP TABLE synced_discovery_findings; DROP TABLE station_identity; PRAGMA user_version = 4");
     }
-    Database db(file.path);
-    EXPECT_EQ(db.schema_version(), 5);
+    // The file as schema version 4 left it (schema/001 .. 004, without 005's tables), with those sessions.
+    test::write_older_version_copy(newest.path, v4_path, 4);
+    {
+        test::RawConnection raw(v4_path);
+        ASSERT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE name = 'station_identity'"), 0);
+    }
+    Database db(v4_path);
+    EXPECT_EQ(db.schema_version(), 6);
     const std::string uuid = uuid_of(db);
     EXPECT_TRUE(std::regex_match(uuid, std::regex("[0-9a-f]{8}-[0-9a-f]{4}-4[0-9a-f]{3}-[89ab][0-9a-f]{3}-[0-9a-f]{12}"))) << uuid;
     const auto sessions = list_test_sessions(db, "N5EM");

@@ -33,7 +33,7 @@ using ::testing::Pair;
 using ::testing::SizeIs;
 using ::testing::ThrowsMessage;
 
-constexpr int kNewestSchemaVersion = 5;  // schema/005_sync.sql
+constexpr int kNewestSchemaVersion = 6;  // schema/006_clustered_by_tail.sql
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -226,26 +226,27 @@ TEST(TestSessionStore, SchemaChecksAreTheSecondLineOfDefence) {
     // Straight SQL, past the checks in store_test_session: the schema still refuses bad values.
     Database db(":memory:");
     db.exec("INSERT INTO aircraft VALUES ('F-WEMA')");
-    const std::string session_sql = "INSERT INTO test_sessions(tail_number, phase, started_utc, verdict, prev_sha256, content_sha256) VALUES ";
+    const std::string session_sql =
+        "INSERT INTO test_sessions(session_id, tail_number, phase, started_utc, verdict, prev_sha256, content_sha256) VALUES (1, ";
     const std::string hashes = ", '', '" + std::string(64, 'a') + "')";
-    EXPECT_THAT([&] { db.exec(session_sql + "('F-WEMA', 'pre-flight', '2026-11-22T20:00:00Z', 'NO_TEST', NULL, NULL)"); },
+    EXPECT_THAT([&] { db.exec(session_sql + "'F-WEMA', 'pre-flight', '2026-11-22T20:00:00Z', 'NO_TEST', NULL, NULL)"); },
                 ThrowsMessage<DbError>(HasSubstr("append-only record: a test session is stored with its hash chain")));
-    EXPECT_THAT([&] { db.exec(session_sql + "('F-WEMA', 'mid-flight', '2026-11-22T20:00:00Z', 'NO_TEST'" + hashes); },
+    EXPECT_THAT([&] { db.exec(session_sql + "'F-WEMA', 'mid-flight', '2026-11-22T20:00:00Z', 'NO_TEST'" + hashes); },
                 ThrowsMessage<DbError>(HasSubstr("CHECK constraint failed")));
-    EXPECT_THAT([&] { db.exec(session_sql + "('F-WEMA', 'pre-flight', '2026-11-22T20:00:00Z', 'OK'" + hashes); },
+    EXPECT_THAT([&] { db.exec(session_sql + "'F-WEMA', 'pre-flight', '2026-11-22T20:00:00Z', 'OK'" + hashes); },
                 ThrowsMessage<DbError>(HasSubstr("CHECK constraint failed")));
-    EXPECT_THAT([&] { db.exec(session_sql + "('F-WNONE', 'pre-flight', '2026-11-22T20:00:00Z', 'NO_TEST'" + hashes); },
+    EXPECT_THAT([&] { db.exec(session_sql + "'F-WNONE', 'pre-flight', '2026-11-22T20:00:00Z', 'NO_TEST'" + hashes); },
                 ThrowsMessage<DbError>(HasSubstr("FOREIGN KEY constraint failed")));
-    db.exec(session_sql + "('F-WEMA', 'pre-flight', '2026-11-22T20:00:00Z', 'NO_TEST'" + hashes);
-    const std::string finding_sql = "INSERT INTO findings(session_id, parameter, estimator, limit_value, limit_kind, status) VALUES ";
-    EXPECT_THAT([&] { db.exec(finding_sql + "(1, 'FDJ_Nm', 'physics', 0.1, 'below', 'WITHIN')"); },
+    db.exec(session_sql + "'F-WEMA', 'pre-flight', '2026-11-22T20:00:00Z', 'NO_TEST'" + hashes);
+    const std::string finding_sql = "INSERT INTO findings(tail_number, session_id, parameter, estimator, limit_value, limit_kind, status) VALUES ('F-WEMA', ";
+    EXPECT_THAT([&] { db.exec(finding_sql + "1, 'FDJ_Nm', 'physics', 0.1, 'below', 'WITHIN')"); },
                 ThrowsMessage<DbError>(HasSubstr("CHECK constraint failed")));
-    EXPECT_THAT([&] { db.exec(finding_sql + "(1, 'FDJ_Nm', 'physics', NULL, 'max', 'WITHIN')"); },
+    EXPECT_THAT([&] { db.exec(finding_sql + "1, 'FDJ_Nm', 'physics', NULL, 'max', 'WITHIN')"); },
                 ThrowsMessage<DbError>(HasSubstr("CHECK constraint failed")));
-    EXPECT_THAT([&] { db.exec(finding_sql + "(2, 'FDJ_Nm', 'physics', 0.1, 'max', 'WITHIN')"); },
+    EXPECT_THAT([&] { db.exec(finding_sql + "2, 'FDJ_Nm', 'physics', 0.1, 'max', 'WITHIN')"); },
                 ThrowsMessage<DbError>(HasSubstr("FOREIGN KEY constraint failed")));
-    db.exec(finding_sql + "(1, 'FDJ_Nm', 'physics', 0.1, 'max', 'WITHIN')");
-    EXPECT_THAT([&] { db.exec(finding_sql + "(1, 'FDJ_Nm', 'physics', 0.1, 'max', 'BEYOND')"); },
+    db.exec(finding_sql + "1, 'FDJ_Nm', 'physics', 0.1, 'max', 'WITHIN')");
+    EXPECT_THAT([&] { db.exec(finding_sql + "1, 'FDJ_Nm', 'physics', 0.1, 'max', 'BEYOND')"); },
                 ThrowsMessage<DbError>(HasSubstr("UNIQUE constraint failed: findings")));
     for (const char* table : {"test_sessions", "findings"}) {
         EXPECT_THAT([&] { db.exec(std::string("DELETE FROM ") + table); },

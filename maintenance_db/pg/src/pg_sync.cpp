@@ -98,8 +98,10 @@ std::optional<double> col_opt_d(Statement& st, int c) { return st.column_is_null
 std::optional<std::int64_t> col_opt_i(Statement& st, int c) { return st.column_is_null(c) ? std::nullopt : std::optional(st.column_int(c)); }
 
 void load_findings(Database& db, std::int64_t lo, std::int64_t hi, std::map<std::int64_t, LightSession>& into) {
-    Statement st(db, "SELECT session_id, parameter, estimator, value, std_error, limit_value, limit_kind, status, note FROM findings "
-                     "WHERE session_id BETWEEN ? AND ? ORDER BY session_id, parameter, estimator");
+    // Findings are keyed by tail first (station schema 6): found through their sessions' rows.
+    Statement st(db, "SELECT f.session_id, f.parameter, f.estimator, f.value, f.std_error, f.limit_value, f.limit_kind, f.status, f.note "
+                     "FROM test_sessions s JOIN findings f ON f.tail_number = s.tail_number AND f.session_id = s.session_id "
+                     "WHERE s.session_id BETWEEN ? AND ? ORDER BY f.session_id, f.parameter, f.estimator");
     st.bind(1, lo).bind(2, hi);
     while (st.step()) {
         auto it = into.find(st.column_int(0));

@@ -109,6 +109,9 @@ struct SessionReceipt {
 struct SessionListParts {
     bool artifacts = true;
     bool runs = true;  ///< without samples or raw logs, with their estimates
+    /// limits_json, limits_sha256 and prev_sha256 (the reports show none of them; a record source
+    /// may leave them empty when false).
+    bool limits_and_links = true;
 };
 [[nodiscard]] std::vector<StoredTestSession> list_test_sessions(Database& db, const std::string& tail_number, const SessionListParts& parts);
 [[nodiscard]] std::vector<StoredTestSession> list_sessions_of_serial(Database& db, const std::string& actuator_serial,
