@@ -245,15 +245,19 @@ private:
     void register_places(const std::set<std::string>& tails, const std::map<std::string, std::pair<std::string, std::string>>& positions) {
         if (!tails.empty()) {
             std::string a;
-            for (const auto& t : tails) a += (a.empty() ? "" : ",") + array_element(t);
+            for (const auto& t : tails) {
+                if (!a.empty()) a += ',';
+                a += array_element(t);
+            }
             pg_.query("INSERT INTO aircraft(tail_number) SELECT unnest($1::text[]) ON CONFLICT DO NOTHING", {"{" + a + "}"});
         }
         if (positions.empty()) return;
         std::string p, ata, desc;
         for (const auto& [name, ad] : positions) {
-            p += (p.empty() ? "" : ",") + array_element(name);
-            ata += (ata.empty() ? "" : ",") + array_element(ad.first);
-            desc += (desc.empty() ? "" : ",") + array_element(ad.second);
+            for (auto [list, element] : {std::pair{&p, &name}, std::pair{&ata, &ad.first}, std::pair{&desc, &ad.second}}) {
+                if (!list->empty()) *list += ',';
+                *list += array_element(*element);
+            }
         }
         pg_.query("INSERT INTO positions(position, ata_reference, description) SELECT * FROM unnest($1::text[], $2::text[], $3::text[]) "
                   "ON CONFLICT DO NOTHING",
