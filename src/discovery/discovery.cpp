@@ -97,6 +97,11 @@ constexpr std::size_t kJsonGenericRanking = 8;
 /// times the better one's and at least kHypothesisMinCostGap above it (cost 1 = the noise floor).
 constexpr double kHypothesisRatio = 1.25;
 constexpr double kHypothesisMinCostGap = 0.1;
+/// A torque periodic in one angle and its twin in the other at the equivalent period differ only by
+/// the transmission's compliance and backlash between the angles, which move the trajectory by less
+/// than the spread of clean runs' costs (1 to 6 floors): one is told apart from the other only when
+/// its trajectory cost is at most half the other's.
+constexpr double kPeriodicTwinRatio = 2.0;
 /// Smallest RMS (in noise floors) of a position sensor offset and drift the sensor stage adds.
 constexpr double kSensorMinRmsFloors = kStructureMinExcessTheta;
 /// The sensor stage's offset and drift must together explain this share of the angle residual's sum
@@ -126,7 +131,9 @@ std::string library_effect_text(EffectKind kind) {
 /// An explanation that leaves the same signature in the torque residual as the one found.
 struct Alternative {
     std::string key, text;
-    sim::Term term;  ///< added to the model without the effect found (start value of its fit)
+    std::vector<sim::Term> terms;  ///< added to the model without the effect found (start values of its fit)
+    /// Cost ratio by which the trajectory tells this explanation and the one found apart.
+    double tell_apart_ratio = kHypothesisRatio;
 };
 
 sim::Term make_term(sim::TermTarget target, double coefficient, std::vector<sim::TermFactor> factors) {
@@ -142,6 +149,70 @@ sim::Term make_term(sim::TermTarget target, double coefficient, std::vector<sim:
 ///   k_t I in T_R:     current sensor gain        | a real torque ~ I (motor torque constant)
 ///   dw/dt in T_R:     inertia                    | speed sensor gain
 ///   F_R in T_R:       a real torque ~ F_R        | hinge-moment sensor gain
+/// The period factor of a periodic block (sin/cos of an angle), or nullptr.
+const sim::TermFactor* period_factor(const sim::Term& t) {
+    for (const auto& f : t.factors) {
+        if (f.basis == sim::TermBasis::Sin || f.basis == sim::TermBasis::Cos) return &f;
+    }
+    return nullptr;
+}
+
+/// Library scan steps are 1.26 (motor angle) to 1.33 (surface angle): the refinement covers one
+/// step either side on a grid this many times finer.
+constexpr double kPeriodRefineSpan = 1.4;
+constexpr int kPeriodRefinePoints = 41;
+
+/// A periodic block's period refined on a grid finer than the library's scan, on the same torque
+/// residual and criterion. The scan's period can be off by half a step; the fit then leaves a beat
+/// in the residual that a second periodic term patches, in the other angle at the same periodicity
+/// (theta_m = tau theta_u), i.e. the same effect named twice. Returns the block unchanged when it is
+/// not periodic or no finer period does better.
+std::vector<sim::Term> refine_period(const RunSignals& s, const ScreenInput& in, const GenericEvidence& best,
+                                     std::uint64_t seed) {
+    if (best.terms.empty() || period_factor(best.terms.front()) == nullptr) return best.terms;
+    const double p0 = period_factor(best.terms.front())->a;
+    TermFamily fam{best.family, {}, 1};
+    for (int i = 0; i < kPeriodRefinePoints; ++i) {
+        const double x = -1.0 + 2.0 * i / (kPeriodRefinePoints - 1);
+        const double period = p0 * std::pow(kPeriodRefineSpan, x);
+        std::vector<sim::Term> block = best.terms;
+        for (auto& t : block) {
+            t.coefficient = 1.0;
+            for (auto& f : t.factors) {
+                if (f.basis == sim::TermBasis::Sin || f.basis == sim::TermBasis::Cos) f.a = period;
+            }
+        }
+        fam.shapes.push_back(std::move(block));
+    }
+    const GenericScreen fine = screen_generated(s, in, {fam}, seed);
+    if (fine.ranking.empty() || !(fine.ranking.front().delta_bic > best.delta_bic)) return best.terms;
+    return fine.ranking.front().terms;
+}
+
+/// The same periodicity in the other angle: a period in theta_u (deg) as one in theta_m (rad), and
+/// back (theta_m = tau theta_u).
+double equivalent_period(const sim::TermFactor& f, double tau) {
+    constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
+    return f.signal == sim::TermSignal::ThetaSurface ? f.a * tau * kDegToRad : f.a / (tau * kDegToRad);
+}
+
+/// Drops from `lib` the periodic shapes in the other angle with the periodicity of a taken periodic
+/// term (within kPeriodRefineSpan): that term already is that effect.
+void drop_same_periodicity(std::vector<TermFamily>& lib, const std::vector<sim::TermFactor>& taken, double tau) {
+    for (auto& fam : lib) {
+        std::erase_if(fam.shapes, [&](const std::vector<sim::Term>& block) {
+            const sim::TermFactor* f = block.empty() ? nullptr : period_factor(block.front());
+            if (f == nullptr) return false;
+            return std::any_of(taken.begin(), taken.end(), [&](const sim::TermFactor& t) {
+                if (t.signal == f->signal) return false;
+                const double ratio = f->a / equivalent_period(t, tau);
+                return ratio < kPeriodRefineSpan && ratio > 1.0 / kPeriodRefineSpan;
+            });
+        });
+    }
+    std::erase_if(lib, [](const TermFamily& fam) { return fam.shapes.empty(); });
+}
+
 std::vector<Alternative> alternatives(const DiscoveryStep& step, const sim::EmaParams& fitted, double j_kgm2,
                                       const RunSignals& s) {
     using sim::TermBasis;
@@ -150,7 +221,7 @@ std::vector<Alternative> alternatives(const DiscoveryStep& step, const sim::EmaP
     std::vector<Alternative> out;
     auto add = [&](const sim::Term& t) {
         const PhysicsName n = physics_name(t);
-        out.push_back({n.key, n.text, t});
+        out.push_back({n.key, n.text, {t}});
     };
     if (step.added) {
         switch (step.added->kind) {
@@ -176,6 +247,20 @@ std::vector<Alternative> alternatives(const DiscoveryStep& step, const sim::EmaP
     } else if (step.added_terms.size() == 1 && step.name_key == "load_torque_gain") {
         add(make_term(TermTarget::Hinge, -step.added_terms.front().coefficient * s.tau,
                       {{TermBasis::Identity, TermSignal::LoadTorque, 0, 0}}));
+    } else if (!step.added_terms.empty() && period_factor(step.added_terms.front()) != nullptr) {
+        // A torque periodic in one angle is periodic in the other at the equivalent period
+        // (theta_m = tau theta_u): only the transmission's compliance and backlash between the two
+        // angles can tell them apart, so the trajectory decides, and may leave them equivalent.
+        std::vector<sim::Term> other = step.added_terms;
+        for (auto& t : other) {
+            for (auto& f : t.factors) {
+                if (f.basis != TermBasis::Sin && f.basis != TermBasis::Cos) continue;
+                f.a = equivalent_period(f, s.tau);
+                f.signal = f.signal == TermSignal::ThetaSurface ? TermSignal::ThetaMotor : TermSignal::ThetaSurface;
+            }
+        }
+        const PhysicsName n = physics_name(other.front());
+        out.push_back({n.key, n.text, other, kPeriodicTwinRatio});
     }
     return out;
 }
@@ -610,6 +695,12 @@ LowSpeedResult low_speed_stage(const Run& run, const RunSignals& s, const NoiseF
         st.verdict = "not confirmed by the fit: " + figures;
     } else if (st.peak_nm < kMinEffectPeakNm) {
         st.verdict = "not added: amplitude below " + fmt3(kMinEffectPeakNm) + " N m: " + figures;
+    } else if (st.cost_health_only < kStructureMinExcessTrajectory * kStructureMinExcessTrajectory) {
+        // The structure report's own threshold (RMS 1.5 x the floor): what the model's own parameters
+        // leave below it is within the spread of clean runs, and a friction fitted to it fits noise.
+        st.verdict = "not added: the model's own parameters refitted on the trajectory leave it at " +
+                     fmt3(st.cost_health_only) + " floors, below the structure threshold of " +
+                     fmt3(kStructureMinExcessTrajectory * kStructureMinExcessTrajectory) + ": " + figures;
     } else if (st.explained < kLowSpeedMinExplained) {
         st.verdict = "not added: explains less than " + fmt3(100.0 * kLowSpeedMinExplained) +
                      " % of the trajectory's excess (structure of another kind): " + figures;
@@ -873,6 +964,7 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
     std::vector<EffectKind> excluded;
     std::vector<std::vector<double>> term_columns;  // signatures of the added terms as data
     std::vector<std::string> taken_families;
+    std::vector<sim::TermFactor> taken_periods;  // period factors of the periodic terms added
     const std::vector<TermFamily> library = options.open_world ? generated_library(s) : std::vector<TermFamily>{};
     const NoiseFloor floor = noise_floor(s, base_sim, mask);
     rep.floor = floor;
@@ -950,6 +1042,7 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
         for (const auto& f : library) {
             if (std::find(taken_families.begin(), taken_families.end(), f.name) == taken_families.end()) open_library.push_back(f);
         }
+        if (!taken_periods.empty()) drop_same_periodicity(open_library, taken_periods, s.tau);
         if (!open_library.empty()) step.generic = screen_generated(s, in, open_library, static_cast<std::uint64_t>(round) + 1);
         const auto& ranking = step.screen.ranking;
         const CandidateEvidence* lib_best = !ranking.empty() && ranking.front().accepted ? &ranking.front() : nullptr;
@@ -967,8 +1060,8 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
         double fit_bic = 0, peak = 0;
         std::string amp_text;
         if (gen_best != nullptr && (lib_best == nullptr || gen_best->delta_bic > lib_best->delta_bic)) {
-            // Open world: the generated terms, fitted by re-simulation.
-            fit = fit_terms(p, gen_best->terms);
+            // Open world: the generated terms (a periodic block's period refined), fitted by re-simulation.
+            fit = fit_terms(p, refine_period(s, in, *gen_best, static_cast<std::uint64_t>(round) + 1));
             const auto k = static_cast<double>(gen_best->terms.size());
             int scanned = 0;
             for (const auto& f : library) {
@@ -1053,7 +1146,7 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
             !step.generic.ranking.empty() && step.generic.ranking.front().delta_bic > 0 ? &step.generic.ranking.front() : nullptr;
         if (step.added && gen_rival != nullptr && gen_rival->terms.size() == 1) {
             const PhysicsName n = physics_name(gen_rival->terms.front());
-            if (n.key != step.name_key) alts.push_back({n.key, n.text, gen_rival->terms.front()});
+            if (n.key != step.name_key) alts.push_back({n.key, n.text, {gen_rival->terms.front()}, kHypothesisRatio});
         }
         if (!alts.empty()) {
             Hypothesis h0{step.name_key, step.name_text, amp_text, traj_new.cost, traj_new, fit.simulations};
@@ -1061,26 +1154,39 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
             struct AltFit {
                 FitResult fit;
                 RunSignals sim;
+                std::size_t terms = 0;  // the alternative's terms, last in the fit's model
+                double tell_apart_ratio = kHypothesisRatio;
             };
             std::vector<AltFit> alt_fits;
             for (const auto& alt : alts) {
                 AltFit af;
+                af.terms = alt.terms.size();
+                af.tell_apart_ratio = alt.tell_apart_ratio;
                 try {
-                    af.fit = fit_terms(p_prev, {alt.term}, kHypothesisFitIterations);
+                    af.fit = fit_terms(p_prev, alt.terms, kHypothesisFitIterations);
                     af.sim = af.fit.signals;
                 } catch (const std::exception& e) {  // the alternative cannot be simulated: it is not a hypothesis
-                    rep.notes.push_back("hypothesis " + alt.key + " (" + alt.term.text() + ") dropped: " + e.what());
+                    rep.notes.push_back("hypothesis " + alt.key + " (" + alt.terms.front().text() + ") dropped: " + e.what());
                     continue;
                 }
                 const TrajectoryError te = trajectory_error(s, af.sim, floor);
-                step.hypotheses.push_back({alt.key, alt.text, af.fit.params.terms.back().text(), te.cost, te,
-                                           af.fit.simulations});
+                std::string change;
+                for (auto t = af.fit.params.terms.end() - static_cast<std::ptrdiff_t>(af.terms); t != af.fit.params.terms.end(); ++t) {
+                    change += (change.empty() ? "" : ", ") + t->text();
+                }
+                step.hypotheses.push_back({alt.key, alt.text, change, te.cost, te, af.fit.simulations, alt.tell_apart_ratio});
                 step.simulations += af.fit.simulations;
                 alt_fits.push_back(std::move(af));
             }
             std::size_t best = 0;
             for (std::size_t i = 1; i < step.hypotheses.size(); ++i) {
                 if (step.hypotheses[i].cost < step.hypotheses[best].cost) best = i;
+            }
+            // An explanation that needs a wider margin than kHypothesisRatio to be told apart (the
+            // periodic twin) replaces the first (the screening's choice) only beyond that margin.
+            if (best != 0) {
+                const Hypothesis& b = step.hypotheses[best];
+                if (b.tell_apart_ratio > kHypothesisRatio && !(b.tell_apart_ratio * b.cost < step.hypotheses[0].cost)) best = 0;
             }
             if (best != 0) {
                 // An alternative explains the trajectory better: it replaces the first explanation.
@@ -1091,17 +1197,23 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
                 traj_new = step.hypotheses[best].error;
                 if (step.added) excluded.push_back(step.added->kind);
                 step.added.reset();
-                step.added_terms = {p_new.terms.back()};
+                step.added_terms.assign(p_new.terms.end() - static_cast<std::ptrdiff_t>(af.terms), p_new.terms.end());
                 step.name_key = step.hypotheses[best].key;
                 step.name_text = step.hypotheses[best].text;
                 step.fitted = fit.values;
                 rep.model.terms.resize(model_terms_before);
             }
+            // The explanation chosen first, then the others by trajectory cost.
+            const Hypothesis chosen = step.hypotheses[best];
+            step.hypotheses.erase(step.hypotheses.begin() + static_cast<std::ptrdiff_t>(best));
             std::stable_sort(step.hypotheses.begin(), step.hypotheses.end(),
                              [](const Hypothesis& a, const Hypothesis& b) { return a.cost < b.cost; });
+            step.hypotheses.insert(step.hypotheses.begin(), chosen);
             if (step.hypotheses.size() >= 2) {
-                const double c1 = step.hypotheses[0].cost, c2 = step.hypotheses[1].cost;
-                step.equivalent = c2 < kHypothesisRatio * c1 || c2 - c1 < kHypothesisMinCostGap;
+                const Hypothesis &h1 = step.hypotheses[0], &h2 = step.hypotheses[1];
+                const double lo = std::min(h1.cost, h2.cost), hi = std::max(h1.cost, h2.cost);
+                const double ratio = std::max(h1.tell_apart_ratio, h2.tell_apart_ratio);
+                step.equivalent = hi < ratio * lo || hi - lo < kHypothesisMinCostGap;
             }
         }
         if (!(traj_new.cost < traj_now.cost)) {
@@ -1123,6 +1235,7 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
             for (std::size_t i = p.terms.size() - step.added_terms.size(); i < p.terms.size(); ++i) {
                 step.added_terms[i - (p.terms.size() - step.added_terms.size())] = p.terms[i];
                 term_columns.push_back(term_signature(s, p.terms[i]));
+                if (const sim::TermFactor* f = period_factor(p.terms[i])) taken_periods.push_back(*f);
                 const PhysicsName n = physics_name(p.terms[i]);
                 rep.model.term_keys.push_back(n.key);
                 rep.model.term_texts.push_back(n.text);

@@ -43,6 +43,7 @@ struct Hypothesis {
     double cost = 0;                 ///< trajectory cost after its fit (1 = at the noise floor)
     TrajectoryError error;
     int simulations = 0;
+    double tell_apart_ratio = 1.25;  ///< cost ratio by which the trajectory tells it from the one found
 };
 
 /// One round: the screening, and the effect it added (if any) with the error after it.

@@ -80,6 +80,35 @@ TEST(OpenWorld, QuadraticFrictionIsNamedAndFittedByReSimulation) {
     EXPECT_EQ(r.unexplained(), nullptr) << r.summary();
 }
 
+// A period between two of the library's scanned periods (6.3 deg lies between 5.49 and 7.29): the
+// period is refined before the fit, and the same periodicity in the other angle (800 x 6.3 deg =
+// 88 rad of motor angle: the same function but for the transmission's compliance) is reported as an
+// equivalent hypothesis, not added as a second effect.
+TEST(OpenWorld, APeriodicTorqueBetweenScannedPeriodsIsRefinedNamedOnceWithItsTwin) {
+    const emadiag::Run run = run_with_term("torque: 0.05*sin(theta_u, 6.3)", 4104);
+    const DiscoveryReport r = discover(run);
+    const auto added = r.added_effects();
+    ASSERT_EQ(added.size(), 1u) << r.summary();
+    ASSERT_THAT(added.front(), ::testing::AnyOf("periodic_torque_surface", "periodic_torque_motor")) << r.summary();
+    const DiscoveryStep& step = r.steps.front();
+    ASSERT_GE(step.hypotheses.size(), 2u);
+    EXPECT_TRUE(step.equivalent) << r.summary();
+    std::vector<std::string> keys;
+    for (const auto& h : step.hypotheses) keys.push_back(h.key);
+    EXPECT_THAT(keys, Contains("periodic_torque_surface"));
+    EXPECT_THAT(keys, Contains("periodic_torque_motor"));
+    double period_deg = 0;
+    for (const auto& t : r.model.params.terms) {
+        for (const auto& f : t.factors) {
+            if (f.basis != sim::TermBasis::Sin && f.basis != sim::TermBasis::Cos) continue;
+            period_deg = f.signal == sim::TermSignal::ThetaSurface ? f.a : f.a / (run.constants.tau * 3.14159265358979323846 / 180.0);
+        }
+    }
+    EXPECT_NEAR(period_deg, 6.3, 0.05 * 6.3);
+    EXPECT_LT(r.model.error_after.current_rms_a, 1.25 * r.floor.current_a) << r.summary();
+    EXPECT_LT(std::abs(r.model.health.front().value - 0.08), std::abs(r.baseline_health.front().value - 0.08));
+}
+
 TEST(OpenWorld, AConstantTorqueIsToldApartFromSensorOffsetsByTheTrajectory) {
     const emadiag::Run run = run_with_term("torque: 0.035", 4102);
     const DiscoveryReport r = discover(run);
