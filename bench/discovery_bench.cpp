@@ -174,6 +174,10 @@ int main(int argc, char** argv) {
                 named += " (~" + st.hypotheses[1].key + ")";
                 for (const auto& h : st.hypotheses) equivalent_with_expected = equivalent_with_expected || h.key == c.expected;
             }
+            if (rep.efficiency.equivalent || rep.efficiency.favoured) {
+                named += std::string(" (") + (rep.efficiency.equivalent ? "~" : ">") + "eta:" + rep.efficiency.key + ")";
+                equivalent_with_expected = equivalent_with_expected || rep.efficiency.key == c.expected;
+            }
             const auto* u = rep.unexplained();
             std::string uvar;
             if (u != nullptr) {

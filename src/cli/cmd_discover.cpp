@@ -122,6 +122,11 @@ void print_text(std::ostream& os, const std::string& path, const discovery::Disc
             os << '\n';
         }
     }
+    if (r.efficiency.ran) {
+        const auto& ea = r.efficiency;
+        os << "\nefficiency or friction (eta_O " << fmt(ea.eta_o, 5) << " +/- " << fmt(ea.eta_o_se, 2) << ", datasheet "
+           << fmt(ea.eta_o_datasheet, 5) << "):\n  " << ea.verdict << '\n';
+    }
     const auto added = r.added_effects();
     os << '\n' << (added.empty() ? "no missing effect found" : "added effects:");
     for (const auto& a : added) os << ' ' << a;

@@ -102,6 +102,9 @@ constexpr double kHypothesisMinCostGap = 0.1;
 /// than the spread of clean runs' costs (1 to 6 floors): one is told apart from the other only when
 /// its trajectory cost is at most half the other's.
 constexpr double kPeriodicTwinRatio = 2.0;
+/// eta_O this many standard errors off the datasheet value is a departure an unmodelled friction
+/// could explain (EfficiencyAlternative).
+constexpr double kEfficiencyMinZ = 5.0;
 /// Smallest RMS (in noise floors) of a position sensor offset and drift the sensor stage adds.
 constexpr double kSensorMinRmsFloors = kStructureMinExcessTheta;
 /// The sensor stage's offset and drift must together explain this share of the angle residual's sum
@@ -722,6 +725,7 @@ std::vector<std::string> DiscoveryReport::added_effects() const {
     }
     if (low_speed.added && !low_speed.refit_of_torque) v.push_back(effect_name(EffectKind::Stribeck));
     for (const auto& f : sensor_findings) v.push_back(f.key);
+    if (efficiency.favoured) v.push_back(efficiency.key);
     return v;
 }
 
@@ -744,6 +748,13 @@ std::string DiscoveryReport::summary() const {
     }
     if (low_speed.added && !low_speed.refit_of_torque) {
         out += (out.empty() ? "found: " : "; ") + library_effect_text(EffectKind::Stribeck) + " (by the trajectory)";
+    }
+    if (efficiency.equivalent || efficiency.favoured) {
+        char buf[200];
+        std::snprintf(buf, sizeof buf, "eta_O %.4g off the datasheet %.4g", efficiency.eta_o, efficiency.eta_o_datasheet);
+        out += (out.empty() ? "found: " : "; ") + std::string(buf) +
+               (efficiency.equivalent ? ", or equivalently on this run " : ", which the trajectory explains better as ") +
+               efficiency.text + " at the datasheet eta_O";
     }
     for (const auto& f : sensor_findings) out += (out.empty() ? "found: " : "; ") + f.text;
     if (const StructureReport* u = unexplained()) {
@@ -881,6 +892,28 @@ nlohmann::json DiscoveryReport::to_json() const {
             ls["verdict"] = low_speed.verdict;
         }
         j["low_speed_stage"] = ls;
+    }
+    {
+        const auto& ea = efficiency;
+        nlohmann::json e = {{"ran", ea.ran}};
+        if (!ea.ran) {
+            e["skipped"] = ea.skipped;
+        } else {
+            e["eta_o"] = ea.eta_o;
+            e["eta_o_std_error"] = ea.eta_o_se;
+            e["eta_o_datasheet"] = ea.eta_o_datasheet;
+            e["friction"] = ea.key.empty() ? nlohmann::json(nullptr) : nlohmann::json(ea.key);
+            if (!ea.key.empty()) {
+                e["physics"] = ea.text;
+                e["change"] = ea.change;
+                e["trajectory_cost_model"] = ea.cost_model;
+                e["trajectory_cost_alternative"] = ea.cost_alternative;
+            }
+            e["equivalent"] = ea.equivalent;
+            e["favoured"] = ea.favoured;
+            e["verdict"] = ea.verdict;
+        }
+        j["efficiency_or_friction"] = e;
     }
     j["trajectory_cost_before"] = trajectory_before.cost;
     j["trajectory_cost_after"] = trajectory_after.cost;
@@ -1331,6 +1364,104 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
             }
             model_sim = std::move(ls.fit.signals);
             traj_now = trajectory_error(s, model_sim, floor);
+        }
+    }
+    // Efficiency or friction: an eta_O off the datasheet may be a friction the model lacks that follows
+    // the load on this run.
+    auto& ea = rep.efficiency;
+    const double eta_ds = sim::EmaParams::datasheet().eta_o;
+    const HealthValue* eta_h = find_health(health, kParamEtaO);
+    if (!options.open_world) {
+        ea.skipped = "closed world";
+    } else if (!eta_free) {
+        ea.skipped = "eta_O is not estimated on this run";
+    } else if (!(std::abs(p.eta_o - eta_ds) > kEfficiencyMinZ * eta_h->std_error)) {
+        ea.skipped = "eta_O is within " + fmt3(kEfficiencyMinZ) + " standard errors of the datasheet value";
+    } else {
+        ea.ran = true;
+        ea.eta_o = p.eta_o;
+        ea.eta_o_se = eta_h->std_error;
+        ea.eta_o_datasheet = eta_ds;
+        ea.cost_model = traj_now.cost;
+        sim::EmaParams p_ds = p;
+        p_ds.eta_o = eta_ds;
+        p_ds.eta_a = sim::eta_a_from_eta_o(eta_ds, p_ds.tau);
+        const RunSignals ds_sim = run_signals(resimulate(run, p_ds));
+        ScreenInput in;
+        in.mask = mask;
+        in.residual_nm.resize(s.size());
+        for (std::size_t k = 0; k < s.size(); ++k) in.residual_nm[k] = s.residual_torque_nm[k] - ds_sim.residual_torque_nm[k];
+        for (auto& col : sensitivities(run, p_ds, ds_sim, {"fdj_nm"})) in.base_columns.push_back(std::move(col));
+        for (const auto& a : accepted) in.base_columns.push_back(signature(s, a));
+        for (const auto& c : term_columns) in.base_columns.push_back(c);
+        // Friction-like families only: what eta_O stands for opposes the motion.
+        std::vector<TermFamily> friction;
+        for (const auto& f : library) {
+            if (f.name.rfind("sgn(w)*", 0) == 0) friction.push_back(f);
+        }
+        const GenericScreen screen = friction.empty() ? GenericScreen{} : screen_generated(s, in, friction, 7);
+        const GenericEvidence* best = !screen.ranking.empty() && screen.ranking.front().accepted ? &screen.ranking.front() : nullptr;
+        if (best == nullptr) {
+            ea.verdict = "eta_O " + fmt3(p.eta_o) + " is the explanation: with eta_O at the datasheet value " + fmt3(eta_ds) +
+                         " no friction-like term explains the torque residual" +
+                         (screen.ranking.empty() ? std::string() : " (best: " + screen.ranking.front().family + ", " +
+                                                                       screen.ranking.front().reason + ")");
+        } else {
+            sim::EmaParams start = p_ds;
+            start.fsj_nm = std::max(fsj_base_nm, start.fdj_nm);
+            std::vector<std::string> names = {"fdj_nm"};
+            for (const auto& t : refine_period(s, in, *best, 7)) {
+                names.push_back(term_parameter(start.terms.size()));
+                start.terms.push_back(t);
+            }
+            try {
+                const FitResult fit = fit_by_resimulation(run, s, start, names, mask, fsj_base_nm, kFitWindowSamples, &p_ds,
+                                                          kHypothesisFitIterations);
+                const sim::Term& t = fit.params.terms.back();
+                const PhysicsName n = physics_name(t);
+                ea.key = n.key;
+                ea.text = n.text;
+                for (auto it = fit.params.terms.end() - static_cast<std::ptrdiff_t>(names.size() - 1); it != fit.params.terms.end(); ++it) {
+                    ea.change += (ea.change.empty() ? "" : ", ") + it->text();
+                }
+                ea.cost_alternative = trajectory_error(s, fit.signals, floor).cost;
+                const double lo = std::min(ea.cost_model, ea.cost_alternative), hi = std::max(ea.cost_model, ea.cost_alternative);
+                ea.equivalent = hi < kHypothesisRatio * lo || hi - lo < kHypothesisMinCostGap;
+                ea.favoured = !ea.equivalent && ea.cost_alternative < ea.cost_model;
+                if (ea.favoured) {
+                    // The model takes the friction with eta_O at the datasheet value.
+                    p = fit.params;
+                    record_health(fit);
+                    HealthValue* eta = find_health(health, kParamEtaO);
+                    eta->value = eta_ds;
+                    eta->std_error = 0;
+                    eta->source = "datasheet";
+                    eta->note = "the trajectory favours " + n.text + " over an efficiency change";
+                    HealthValue* eta_a_value = find_health(health, kParamEtaA);
+                    eta_a_value->value = p.eta_a;
+                    eta_a_value->std_error = 0;
+                    eta_a_value->source = "datasheet";
+                    record_term_errors(p, fit);
+                    for (std::size_t i = p.terms.size() - (names.size() - 1); i < p.terms.size(); ++i) {
+                        const PhysicsName tn = physics_name(p.terms[i]);
+                        rep.model.term_keys.push_back(tn.key);
+                        rep.model.term_texts.push_back(tn.text);
+                    }
+                    model_sim = fit.signals;
+                    traj_now = trajectory_error(s, model_sim, floor);
+                }
+                const std::string costs = "trajectory cost " + fmt3(ea.cost_model) + " with eta_O " + fmt3(ea.eta_o) + ", " +
+                                          fmt3(ea.cost_alternative) + " with eta_O " + fmt3(eta_ds) + " and " + ea.change;
+                ea.verdict = ea.equivalent ? "equivalent on this run: eta_O " + fmt3(ea.eta_o) + " (off the datasheet " +
+                                                 fmt3(eta_ds) + ") or " + n.text + " at the datasheet eta_O (" + costs +
+                                                 "); a run at another load (case A, a load rig) tells them apart"
+                             : ea.favoured ? "the trajectory favours " + n.text + " at the datasheet eta_O over eta_O " +
+                                                 fmt3(ea.eta_o) + " (" + costs + ")"
+                                           : "eta_O " + fmt3(ea.eta_o) + " is the explanation: the trajectory rejects " + n.text +
+                                                 " at the datasheet eta_O (" + costs + ")";
+            } catch (const std::exception& e) {
+                ea.verdict = "the alternative " + best->family + " could not be simulated: " + e.what();
+            }
         }
     }
     rep.structure = structure_reports(s, model_sim, mask, floor);

@@ -109,12 +109,32 @@ struct LowSpeedStage {
     std::string verdict;
 };
 
+/// An efficiency change the run cannot tell from a friction the model lacks (docs/discovery.md
+/// "Efficiency or friction"): eta_O enters the model as friction proportional to the load, sgn(w) |F_R|;
+/// a friction proportional to another signal that follows the load on this run (|theta_u| under an
+/// aerodynamic load that grows with the deflection, case B) is absorbed into eta_O, the residual is
+/// then at the floor, and the estimate departs from the datasheet. The alternative keeps eta_O at the
+/// datasheet value and screens the friction-like terms of the generated library on the torque residual
+/// that leaves; the best is fitted by re-simulation and the trajectory compares the two.
+struct EfficiencyAlternative {
+    bool ran = false;
+    std::string skipped;                 ///< why it did not run (eta_O not estimated, or at the datasheet)
+    double eta_o = 0, eta_o_se = 0;      ///< the model's
+    double eta_o_datasheet = 0;
+    std::string key, text, change;       ///< the friction found with eta_O at the datasheet value
+    double cost_model = 0, cost_alternative = 0;  ///< trajectory costs (1 = noise floor)
+    bool equivalent = false;             ///< not told apart by the trajectory
+    bool favoured = false;               ///< the trajectory favours the friction over the efficiency change
+    std::string verdict;
+};
+
 struct DiscoveryReport {
     std::string load_case, sequence;
     std::size_t samples = 0;
     NoiseFloor floor;                            ///< the run's own noise floor (trajectory.hpp)
     std::vector<SensorFinding> sensor_findings;
     LowSpeedStage low_speed;                     ///< Stribeck friction found by the trajectory (library effect)
+    EfficiencyAlternative efficiency;            ///< an efficiency change the run cannot tell from a friction
     std::vector<StructureReport> structure;      ///< the residual of the final model, per channel
     TrajectoryError trajectory_before, trajectory_after;
     std::vector<HealthValue> baseline_health;  ///< step 1: estimated or datasheet

@@ -109,6 +109,37 @@ TEST(OpenWorld, APeriodicTorqueBetweenScannedPeriodsIsRefinedNamedOnceWithItsTwi
     EXPECT_LT(std::abs(r.model.health.front().value - 0.08), std::abs(r.baseline_health.front().value - 0.08));
 }
 
+// Efficiency or friction: in case B the aerodynamic load grows with the deflection, so a friction
+// ~ |theta_u| is absorbed into eta_O and the torque residual is at its floor. With eta_O at the
+// datasheet value the friction is found again, and the trajectory favours it. A real efficiency loss
+// stays one: the friction that mimics it at the datasheet eta_O is rejected by the trajectory.
+TEST(OpenWorld, AFrictionAbsorbedIntoEtaIsToldFromAnEfficiencyLossByTheTrajectory) {
+    const DiscoveryReport r = discover(run_with_term("torque: 0.005*sgn(w)*abs(theta_u)", 4105));
+    ASSERT_TRUE(r.efficiency.ran) << r.efficiency.skipped;
+    EXPECT_LT(r.efficiency.eta_o, 0.84);
+    EXPECT_TRUE(r.efficiency.favoured) << r.efficiency.verdict;
+    ASSERT_THAT(r.added_effects(), ElementsAre("friction_deflection")) << r.summary();
+    ASSERT_EQ(r.model.params.terms.size(), 1u);
+    const sim::Term& t = r.model.params.terms.front();
+    EXPECT_NEAR(t.coefficient, 0.005, 3 * t.std_error + 0.1 * 0.005) << t.text() << " se " << t.std_error;
+    EXPECT_DOUBLE_EQ(r.model.params.eta_o, sim::EmaParams::datasheet().eta_o);
+    EXPECT_LT(r.trajectory_after.cost, r.trajectory_before.cost);
+
+    sim::SimConfig c;
+    c.load_case = sim::LoadCase::B;
+    c.sequence = sim::Sequence::Dyn;
+    c.noise = sim::NoiseProfile::Typical;
+    c.seed = 4106;
+    c.params.eta_o = 0.78;
+    c.params.eta_a = sim::eta_a_from_eta_o(c.params.eta_o, c.params.tau);
+    const DiscoveryReport worn = discover(make_run(c, sim::simulate(c)));
+    ASSERT_TRUE(worn.efficiency.ran) << worn.efficiency.skipped;
+    EXPECT_FALSE(worn.efficiency.favoured) << worn.efficiency.verdict;
+    EXPECT_FALSE(worn.efficiency.equivalent) << worn.efficiency.verdict;
+    EXPECT_TRUE(worn.added_effects().empty()) << worn.summary();
+    EXPECT_NEAR(worn.model.params.eta_o, 0.78, 0.005);
+}
+
 TEST(OpenWorld, AConstantTorqueIsToldApartFromSensorOffsetsByTheTrajectory) {
     const emadiag::Run run = run_with_term("torque: 0.035", 4102);
     const DiscoveryReport r = discover(run);
