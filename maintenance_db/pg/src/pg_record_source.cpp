@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cstring>
 #include <limits>
 #include <string_view>
 #include <tuple>
@@ -43,6 +44,19 @@ constexpr const char* kSessionColumns =
     "s.position, coalesce(p.ata_reference, ''), coalesce(p.description, ''), s.cycles, s.hours_h, s.operator_id, s.technician_name, "
     "s.technician_certificate, s.work_performed, s.source, s.limits_sha256, s.amends_session_id, s.correction_reason, s.prev_sha256, "
     "s.content_sha256 FROM test_sessions s LEFT JOIN positions p ON p.position = s.position";
+
+/// The session columns without the three texts a report never shows (SessionListParts::limits_and_links
+/// false): empty strings in their places, as the SQLite store leaves them.
+std::string session_columns(bool limits_and_links) {
+    std::string c = kSessionColumns;
+    if (!limits_and_links) {
+        for (const char* col : {"s.limits_json,", "s.limits_sha256,", "s.prev_sha256,"}) {
+            const std::size_t at = c.find(col);
+            c.replace(at, std::strlen(col) - 1, "''");
+        }
+    }
+    return c;
+}
 
 StoredTestSession read_session(const Row& r) {
     StoredTestSession s;
@@ -124,7 +138,8 @@ std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string&
                                                               bool by_tail) {
     std::vector<StoredTestSession> out;
     std::unordered_map<std::int64_t, std::size_t> index;
-    pg_.each_row(std::string("SELECT ") + kSessionColumns + " WHERE " + where + " ORDER BY s.started_utc, s.session_id", {value}, [&](const Row& r) {
+    pg_.each_row("SELECT " + session_columns(parts.limits_and_links) + " WHERE " + where + " ORDER BY s.started_utc, s.session_id", {value},
+                 [&](const Row& r) {
         out.push_back(read_session(r));
         index[out.back().session_id] = out.size() - 1;
     });

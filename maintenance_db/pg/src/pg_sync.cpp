@@ -97,25 +97,31 @@ std::optional<std::string> col_opt_text(Statement& st, int c) { return st.column
 std::optional<double> col_opt_d(Statement& st, int c) { return st.column_is_null(c) ? std::nullopt : std::optional(st.column_double(c)); }
 std::optional<std::int64_t> col_opt_i(Statement& st, int c) { return st.column_is_null(c) ? std::nullopt : std::optional(st.column_int(c)); }
 
-void load_findings(Database& db, std::int64_t lo, std::int64_t hi, std::map<std::int64_t, LightSession>& into) {
-    // Findings are keyed by tail first (station schema 6): found through their sessions' rows.
+void load_findings(Database& db, const std::set<std::string>& tails, std::int64_t lo, std::int64_t hi,
+                   std::map<std::int64_t, LightSession>& into) {
+    // Findings are keyed by tail first (station schema 6): one range of the key per tail of the batch.
+    // (A join through the sessions' rows let SQLite carry the session-id range over to the findings and
+    // search, for every session, all its tail's findings in the range: quadratic in the sessions a tail
+    // has in one batch; 1,218 us a session for a station of 10 tails, against 45 us for 1,000 tails.)
     Statement st(db, "SELECT f.session_id, f.parameter, f.estimator, f.value, f.std_error, f.limit_value, f.limit_kind, f.status, f.note "
-                     "FROM test_sessions s JOIN findings f ON f.tail_number = s.tail_number AND f.session_id = s.session_id "
-                     "WHERE s.session_id BETWEEN ? AND ? ORDER BY f.session_id, f.parameter, f.estimator");
-    st.bind(1, lo).bind(2, hi);
-    while (st.step()) {
-        auto it = into.find(st.column_int(0));
-        if (it == into.end()) continue;
-        StoredFinding x;
-        x.parameter = st.column_text(1);
-        x.estimator = st.column_text(2);
-        x.value = col_opt_d(st, 3);
-        x.std_error = col_opt_d(st, 4);
-        x.limit_value = col_opt_d(st, 5);
-        x.limit_kind = st.column_text(6);
-        x.status = st.column_text(7);
-        x.note = st.column_text(8);
-        it->second.findings.push_back(std::move(x));
+                     "FROM findings f WHERE f.tail_number = ? AND f.session_id BETWEEN ? AND ? ORDER BY f.session_id, f.parameter, f.estimator");
+    for (const auto& tail : tails) {
+        st.reset();
+        st.bind(1, tail).bind(2, lo).bind(3, hi);
+        while (st.step()) {
+            auto it = into.find(st.column_int(0));
+            if (it == into.end()) continue;
+            StoredFinding x;
+            x.parameter = st.column_text(1);
+            x.estimator = st.column_text(2);
+            x.value = col_opt_d(st, 3);
+            x.std_error = col_opt_d(st, 4);
+            x.limit_value = col_opt_d(st, 5);
+            x.limit_kind = st.column_text(6);
+            x.status = st.column_text(7);
+            x.note = st.column_text(8);
+            it->second.findings.push_back(std::move(x));
+        }
     }
 }
 
@@ -134,7 +140,7 @@ LightSession load_light(Database& db, std::int64_t id) {
     l.position = col_opt_text(st, 5);
     l.cycles = col_opt_i(st, 6);
     l.amends = col_opt_i(st, 7);
-    load_findings(db, id, id, m);
+    load_findings(db, {m.begin()->second.tail}, id, id, m);
     return m[id];
 }
 
@@ -311,7 +317,7 @@ private:
                                         f(col_opt_text(st, 23)));
             }
         }
-        load_findings(db_, lo, hi, light);
+        load_findings(db_, tails, lo, hi, light);
         struct LocalRun {
             std::int64_t run_id, session_id;
             std::string line;
