@@ -1284,90 +1284,9 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
         rep.model.error_after = step.error_after;
         rep.steps.push_back(std::move(step));
     }
-    // Sensor stage: the angle channel, which the torque residual does not see (offset and drift).
-    if (options.open_world) sensor_stage(run, s, floor, mask, p, model_sim, traj_now, rep);
-    // Low-speed friction by the trajectory: a Stribeck friction the torque residual is too noisy to see.
-    const bool stribeck_in = std::find_if(accepted.begin(), accepted.end(), [](const EffectShape& a) {
-                                 return a.kind == EffectKind::Stribeck;
-                             }) != accepted.end() ||
-                             std::find(excluded.begin(), excluded.end(), EffectKind::Stribeck) != excluded.end();
-    // A Stribeck friction the torque rounds found is estimated again on the trajectory, which
-    // determines it far better (the torque fit leaves amplitude and w_s along their valley): the
-    // stage runs on the model without it, and its estimate replaces the torque fit's when it brings
-    // the trajectory closer than that fit.
-    const bool stribeck_by_torque = std::find_if(accepted.begin(), accepted.end(), [](const EffectShape& a) {
-                                        return a.kind == EffectKind::Stribeck;
-                                    }) != accepted.end();
-    if (stribeck_in && !stribeck_by_torque) {
-        rep.low_speed.skipped = "Stribeck friction was set aside by the hypotheses";
-    } else {
-        // The model's own parameters, refitted on the trajectory with and without the Stribeck friction.
-        sim::EmaParams p_base = p;
-        RunSignals base_sim_ls = model_sim;
-        if (stribeck_by_torque) {
-            p_base.effects.stribeck_amplitude_nm = 0.0;
-            base_sim_ls = run_signals(resimulate(run, p_base));
-        }
-        std::vector<std::string> model_names = health_names;
-        for (const auto& a : accepted) {
-            if (a.kind == EffectKind::Stribeck) continue;
-            for (const auto& n : fitted_sim_effects(a.kind)) model_names.push_back(n);
-        }
-        for (std::size_t i = 0; i < p.terms.size(); ++i) model_names.push_back(term_parameter(i));
-        LowSpeedResult ls = low_speed_stage(run, s, floor, mask, fsj_base_nm, model_names, p_base, base_sim_ls,
-                                            trajectory_error(s, base_sim_ls, floor).cost);
-        rep.low_speed = ls.stage;
-        if (stribeck_by_torque) {
-            rep.low_speed.refit_of_torque = true;
-            if (ls.stage.added && !(ls.stage.cost_with < traj_now.cost)) {
-                rep.low_speed.added = false;
-                rep.low_speed.verdict = "the torque rounds' fit is kept: the trajectory's estimate does not bring the "
-                                        "trajectory closer (" + fmt3(ls.stage.cost_with) + " against " + fmt3(traj_now.cost) + ")";
-            } else if (ls.stage.added) {
-                // ... nor may it spoil the torque evidence that found the friction: the chi-square of the
-                // torque window means may rise by at most kLowSpeedMaxTorqueChi2Rise.
-                const ErrorMetrics e_old = model_error(s, model_sim, mask), e_new = model_error(s, ls.fit.signals, mask);
-                const double windows = static_cast<double>(e_old.torque_samples) / static_cast<double>(kMetricWindowSamples);
-                const double rise = windows *
-                                    (std::pow(e_new.residual_torque_window_rms_nm, 2) - std::pow(e_old.residual_torque_window_rms_nm, 2)) /
-                                    std::pow(std::max(floor.torque_window_nm, 1e-300), 2);
-                if (rise > kLowSpeedMaxTorqueChi2Rise) {
-                    rep.low_speed.added = false;
-                    rep.low_speed.verdict = "the torque rounds' fit is kept: the trajectory's estimate would raise the "
-                                            "chi-square of the torque window means by " + fmt3(rise);
-                }
-            }
-        }
-        if (rep.low_speed.added) {
-            p = ls.fit.params;
-            record_health(ls.fit);
-            if (!stribeck_by_torque) accepted.push_back({EffectKind::Stribeck, p.effects.stribeck_speed_rad_s, 0});
-            // The refitted values of the model's other parameters, then the Stribeck friction's.
-            record_term_errors(p, ls.fit);
-            for (const auto& f : ls.fit.values) {
-                if (f.name == "fdj_nm" || f.name == "eta_o" || is_term_parameter(f.name)) continue;
-                const std::string field = effect_field(f.name);
-                bool known = false;
-                for (auto& t : rep.model.terms) {
-                    if (t.effect == field) {
-                        t.value = f.value;
-                        t.std_error = f.std_error;
-                        known = true;
-                    }
-                }
-                if (!known) rep.model.terms.push_back({field, f.value, f.std_error});
-            }
-            for (auto& f : rep.sensor_findings) {  // the sensor terms as refitted
-                for (const auto& t : p.terms) {
-                    if (t.target == f.term.target && t.basis_text() == f.term.basis_text()) f.term = t;
-                }
-            }
-            model_sim = std::move(ls.fit.signals);
-            traj_now = trajectory_error(s, model_sim, floor);
-        }
-    }
     // Efficiency or friction: an eta_O off the datasheet may be a friction the model lacks that follows
-    // the load on this run.
+    // the load on this run. Settled before the sensor stage: the angle residual such a friction leaves
+    // (about a drift) is not a sensor's.
     auto& ea = rep.efficiency;
     const double eta_ds = sim::EmaParams::datasheet().eta_o;
     const HealthValue* eta_h = find_health(health, kParamEtaO);
@@ -1449,6 +1368,8 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
                     }
                     model_sim = fit.signals;
                     traj_now = trajectory_error(s, model_sim, floor);
+                    // The stages after this one keep eta_O at the datasheet value.
+                    std::erase(health_names, std::string("eta_o"));
                 }
                 const std::string costs = "trajectory cost " + fmt3(ea.cost_model) + " with eta_O " + fmt3(ea.eta_o) + ", " +
                                           fmt3(ea.cost_alternative) + " with eta_O " + fmt3(eta_ds) + " and " + ea.change;
@@ -1462,6 +1383,88 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
             } catch (const std::exception& e) {
                 ea.verdict = "the alternative " + best->family + " could not be simulated: " + e.what();
             }
+        }
+    }
+    // Sensor stage: the angle channel, which the torque residual does not see (offset and drift).
+    if (options.open_world) sensor_stage(run, s, floor, mask, p, model_sim, traj_now, rep);
+    // Low-speed friction by the trajectory: a Stribeck friction the torque residual is too noisy to see.
+    const bool stribeck_in = std::find_if(accepted.begin(), accepted.end(), [](const EffectShape& a) {
+                                 return a.kind == EffectKind::Stribeck;
+                             }) != accepted.end() ||
+                             std::find(excluded.begin(), excluded.end(), EffectKind::Stribeck) != excluded.end();
+    // A Stribeck friction the torque rounds found is estimated again on the trajectory, which
+    // determines it far better (the torque fit leaves amplitude and w_s along their valley): the
+    // stage runs on the model without it, and its estimate replaces the torque fit's when it brings
+    // the trajectory closer than that fit.
+    const bool stribeck_by_torque = std::find_if(accepted.begin(), accepted.end(), [](const EffectShape& a) {
+                                        return a.kind == EffectKind::Stribeck;
+                                    }) != accepted.end();
+    if (stribeck_in && !stribeck_by_torque) {
+        rep.low_speed.skipped = "Stribeck friction was set aside by the hypotheses";
+    } else {
+        // The model's own parameters, refitted on the trajectory with and without the Stribeck friction.
+        sim::EmaParams p_base = p;
+        RunSignals base_sim_ls = model_sim;
+        if (stribeck_by_torque) {
+            p_base.effects.stribeck_amplitude_nm = 0.0;
+            base_sim_ls = run_signals(resimulate(run, p_base));
+        }
+        std::vector<std::string> model_names = health_names;
+        for (const auto& a : accepted) {
+            if (a.kind == EffectKind::Stribeck) continue;
+            for (const auto& n : fitted_sim_effects(a.kind)) model_names.push_back(n);
+        }
+        for (std::size_t i = 0; i < p.terms.size(); ++i) model_names.push_back(term_parameter(i));
+        LowSpeedResult ls = low_speed_stage(run, s, floor, mask, fsj_base_nm, model_names, p_base, base_sim_ls,
+                                            trajectory_error(s, base_sim_ls, floor).cost);
+        rep.low_speed = ls.stage;
+        if (stribeck_by_torque) {
+            rep.low_speed.refit_of_torque = true;
+            if (ls.stage.added && !(ls.stage.cost_with < traj_now.cost)) {
+                rep.low_speed.added = false;
+                rep.low_speed.verdict = "the torque rounds' fit is kept: the trajectory's estimate does not bring the "
+                                        "trajectory closer (" + fmt3(ls.stage.cost_with) + " against " + fmt3(traj_now.cost) + ")";
+            } else if (ls.stage.added) {
+                // ... nor may it spoil the torque evidence that found the friction: the chi-square of the
+                // torque window means may rise by at most kLowSpeedMaxTorqueChi2Rise.
+                const ErrorMetrics e_old = model_error(s, model_sim, mask), e_new = model_error(s, ls.fit.signals, mask);
+                const double windows = static_cast<double>(e_old.torque_samples) / static_cast<double>(kMetricWindowSamples);
+                const double rise = windows *
+                                    (std::pow(e_new.residual_torque_window_rms_nm, 2) - std::pow(e_old.residual_torque_window_rms_nm, 2)) /
+                                    std::pow(std::max(floor.torque_window_nm, 1e-300), 2);
+                if (rise > kLowSpeedMaxTorqueChi2Rise) {
+                    rep.low_speed.added = false;
+                    rep.low_speed.verdict = "the torque rounds' fit is kept: the trajectory's estimate would raise the "
+                                            "chi-square of the torque window means by " + fmt3(rise);
+                }
+            }
+        }
+        if (rep.low_speed.added) {
+            p = ls.fit.params;
+            record_health(ls.fit);
+            if (!stribeck_by_torque) accepted.push_back({EffectKind::Stribeck, p.effects.stribeck_speed_rad_s, 0});
+            // The refitted values of the model's other parameters, then the Stribeck friction's.
+            record_term_errors(p, ls.fit);
+            for (const auto& f : ls.fit.values) {
+                if (f.name == "fdj_nm" || f.name == "eta_o" || is_term_parameter(f.name)) continue;
+                const std::string field = effect_field(f.name);
+                bool known = false;
+                for (auto& t : rep.model.terms) {
+                    if (t.effect == field) {
+                        t.value = f.value;
+                        t.std_error = f.std_error;
+                        known = true;
+                    }
+                }
+                if (!known) rep.model.terms.push_back({field, f.value, f.std_error});
+            }
+            for (auto& f : rep.sensor_findings) {  // the sensor terms as refitted
+                for (const auto& t : p.terms) {
+                    if (t.target == f.term.target && t.basis_text() == f.term.basis_text()) f.term = t;
+                }
+            }
+            model_sim = std::move(ls.fit.signals);
+            traj_now = trajectory_error(s, model_sim, floor);
         }
     }
     rep.structure = structure_reports(s, model_sim, mask, floor);
