@@ -93,9 +93,8 @@ HealthValue* find_health(std::vector<HealthValue>& v, const char* name) {
 /// Entries of the generated library's ranking written per step in the JSON report.
 constexpr std::size_t kJsonGenericRanking = 8;
 
-/// Two hypotheses are told apart by the trajectory when the worse one's cost is at least this many
-/// times the better one's and at least kHypothesisMinCostGap above it (cost 1 = the noise floor).
-constexpr double kHypothesisRatio = 1.25;
+/// With kHypothesisRatio (discovery.hpp): two hypotheses are told apart only when the worse cost is
+/// also at least this far above the better one.
 constexpr double kHypothesisMinCostGap = 0.1;
 /// A torque periodic in one angle and its twin in the other at the equivalent period differ only by
 /// the transmission's compliance and backlash between the angles. The trajectory does not tell them
@@ -106,6 +105,8 @@ constexpr double kPeriodicTwinRatio = std::numeric_limits<double>::infinity();
 /// eta_O this many standard errors off the datasheet value is a departure an unmodelled friction
 /// could explain (EfficiencyAlternative).
 constexpr double kEfficiencyMinZ = 5.0;
+/// Seed of the efficiency stage's screening (its cross-validation and resampling).
+constexpr std::uint64_t kEfficiencyScreenSeed = 7;
 /// Iterations of the final refit on the trajectory: it starts next to its optimum (the torque fit's
 /// values), and the time goal of one discover() (2 s of CPU) leaves room for about four batches of a
 /// model with a periodic term (a sine per step and lane).
@@ -144,23 +145,13 @@ struct Alternative {
     double tell_apart_ratio = kHypothesisRatio;
 };
 
-sim::Term make_term(sim::TermTarget target, double coefficient, std::vector<sim::TermFactor> factors) {
-    sim::Term t;
-    t.target = target;
-    t.coefficient = coefficient;
-    t.factors = std::move(factors);
-    return t;
-}
+/// A periodic basis (sin or cos): its parameter a is the period.
+bool is_period_basis(const sim::TermFactor& f) { return f.basis == sim::TermBasis::Sin || f.basis == sim::TermBasis::Cos; }
 
-/// The alternatives of a step's explanation (docs/discovery.md "Hypotheses"):
-///   constant in T_R:  hinge-moment sensor offset | constant torque | current sensor offset
-///   k_t I in T_R:     current sensor gain        | a real torque ~ I (motor torque constant)
-///   dw/dt in T_R:     inertia                    | speed sensor gain
-///   F_R in T_R:       a real torque ~ F_R        | hinge-moment sensor gain
 /// The period factor of a periodic block (sin/cos of an angle), or nullptr.
 const sim::TermFactor* period_factor(const sim::Term& t) {
     for (const auto& f : t.factors) {
-        if (f.basis == sim::TermBasis::Sin || f.basis == sim::TermBasis::Cos) return &f;
+        if (is_period_basis(f)) return &f;
     }
     return nullptr;
 }
@@ -187,7 +178,7 @@ std::vector<sim::Term> refine_period(const RunSignals& s, const ScreenInput& in,
         for (auto& t : block) {
             t.coefficient = 1.0;
             for (auto& f : t.factors) {
-                if (f.basis == sim::TermBasis::Sin || f.basis == sim::TermBasis::Cos) f.a = period;
+                if (is_period_basis(f)) f.a = period;
             }
         }
         fam.shapes.push_back(std::move(block));
@@ -221,6 +212,20 @@ void drop_same_periodicity(std::vector<TermFamily>& lib, const std::vector<sim::
     std::erase_if(lib, [](const TermFamily& fam) { return fam.shapes.empty(); });
 }
 
+sim::Term make_term(sim::TermTarget target, double coefficient, std::vector<sim::TermFactor> factors) {
+    sim::Term t;
+    t.target = target;
+    t.coefficient = coefficient;
+    t.factors = std::move(factors);
+    return t;
+}
+
+/// The alternatives of a step's explanation (docs/discovery.md "Hypotheses"):
+///   constant in T_R:  hinge-moment sensor offset | constant torque | current sensor offset
+///   k_t I in T_R:     current sensor gain        | a real torque ~ I (motor torque constant)
+///   dw/dt in T_R:     inertia                    | speed sensor gain
+///   F_R in T_R:       a real torque ~ F_R        | hinge-moment sensor gain
+///   periodic term:    the same periodicity in the other angle (the twin; always equivalent)
 std::vector<Alternative> alternatives(const DiscoveryStep& step, const sim::EmaParams& fitted, double j_kgm2,
                                       const RunSignals& s) {
     using sim::TermBasis;
@@ -262,7 +267,7 @@ std::vector<Alternative> alternatives(const DiscoveryStep& step, const sim::EmaP
         std::vector<sim::Term> other = step.added_terms;
         for (auto& t : other) {
             for (auto& f : t.factors) {
-                if (f.basis != TermBasis::Sin && f.basis != TermBasis::Cos) continue;
+                if (!is_period_basis(f)) continue;
                 f.a = equivalent_period(f, s.tau);
                 f.signal = f.signal == TermSignal::ThetaSurface ? TermSignal::ThetaMotor : TermSignal::ThetaSurface;
             }
@@ -1220,13 +1225,11 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
                 FitResult fit;
                 RunSignals sim;
                 std::size_t terms = 0;  // the alternative's terms, last in the fit's model
-                double tell_apart_ratio = kHypothesisRatio;
             };
             std::vector<AltFit> alt_fits;
             for (const auto& alt : alts) {
                 AltFit af;
                 af.terms = alt.terms.size();
-                af.tell_apart_ratio = alt.tell_apart_ratio;
                 try {
                     af.fit = fit_terms(p_prev, alt.terms, kHypothesisFitIterations);
                     af.sim = af.fit.signals;
@@ -1350,7 +1353,7 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
         for (const auto& f : library) {
             if (f.name.rfind("sgn(w)*", 0) == 0) friction.push_back(f);
         }
-        const GenericScreen screen = friction.empty() ? GenericScreen{} : screen_generated(s, in, friction, 7);
+        const GenericScreen screen = friction.empty() ? GenericScreen{} : screen_generated(s, in, friction, kEfficiencyScreenSeed);
         const GenericEvidence* best = !screen.ranking.empty() && screen.ranking.front().accepted ? &screen.ranking.front() : nullptr;
         if (best == nullptr) {
             ea.verdict = "eta_O " + fmt3(p.eta_o) + " is the explanation: with eta_O at the datasheet value " + fmt3(eta_ds) +
@@ -1361,7 +1364,7 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
             sim::EmaParams start = p_ds;
             start.fsj_nm = std::max(fsj_base_nm, start.fdj_nm);
             std::vector<std::string> names = {"fdj_nm"};
-            for (const auto& t : refine_period(s, in, *best, 7)) {
+            for (const auto& t : refine_period(s, in, *best, kEfficiencyScreenSeed)) {
                 names.push_back(term_parameter(start.terms.size()));
                 start.terms.push_back(t);
             }
@@ -1381,8 +1384,7 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
                 ea.favoured = !ea.equivalent && ea.cost_alternative < ea.cost_model;
                 if (ea.favoured) {
                     // The model takes the friction with eta_O at the datasheet value.
-                    p = fit.params;
-                    record_health(fit);
+                    adopt_trajectory_fit(fit);
                     HealthValue* eta = find_health(health, kParamEtaO);
                     eta->value = eta_ds;
                     eta->std_error = 0;
@@ -1392,14 +1394,11 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
                     eta_a_value->value = p.eta_a;
                     eta_a_value->std_error = 0;
                     eta_a_value->source = "datasheet";
-                    record_term_errors(p, fit);
                     for (std::size_t i = p.terms.size() - (names.size() - 1); i < p.terms.size(); ++i) {
                         const PhysicsName tn = physics_name(p.terms[i]);
                         rep.model.term_keys.push_back(tn.key);
                         rep.model.term_texts.push_back(tn.text);
                     }
-                    model_sim = fit.signals;
-                    traj_now = trajectory_error(s, model_sim, floor);
                     // The stages after this one keep eta_O at the datasheet value.
                     std::erase(health_names, std::string("eta_o"));
                 }
@@ -1483,11 +1482,10 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
     // call unexplained; kept when it removes half the excess over the floor.
     const bool effects_added = std::any_of(rep.steps.begin(), rep.steps.end(),
                                            [](const DiscoveryStep& st) { return st.added || !st.added_terms.empty(); });
-    const auto structure_left = [&] {
-        const auto reports = structure_reports(s, model_sim, mask, floor);
-        return std::any_of(reports.begin(), reports.end(), [](const StructureReport& r) { return r.significant; });
-    };
-    if (effects_added && !rep.low_speed.added && structure_left()) {
+    rep.structure = structure_reports(s, model_sim, mask, floor);
+    const bool structure_left =
+        std::any_of(rep.structure.begin(), rep.structure.end(), [](const StructureReport& r) { return r.significant; });
+    if (effects_added && !rep.low_speed.added && structure_left) {
         std::vector<std::string> names = health_names;
         for (const auto& a : accepted) {
             for (const auto& n : fitted_sim_effects(a.kind)) names.push_back(n);
@@ -1523,12 +1521,12 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
                     v.std_error = std::max(v.std_error, before);
                 }
                 adopt_trajectory_fit(taken);
+                rep.structure = structure_reports(s, model_sim, mask, floor);
             }
         } catch (const std::exception& e) {
             rep.notes.push_back(std::string("final refit on the trajectory not possible: ") + e.what());
         }
     }
-    rep.structure = structure_reports(s, model_sim, mask, floor);
     rep.trajectory_after = traj_now;
     rep.model.error_after = model_error(s, model_sim, mask);
     rep.model.params = p;

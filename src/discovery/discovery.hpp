@@ -34,6 +34,10 @@ struct DiscoveryOptions {
     bool open_world = true;  ///< screen the generated term library and the sensor stage (issue 10)
 };
 
+/// Two hypotheses are told apart by the trajectory when the worse one's cost is at least this many
+/// times the better one's (and above it by a margin, discovery.cpp); cost 1 = the noise floor.
+inline constexpr double kHypothesisRatio = 1.25;
+
 /// One explanation of a signature in the torque residual, re-simulated: a library effect, or terms.
 /// Hypotheses that leave the same torque residual (a sensor offset and a real torque) are told
 /// apart by the re-simulated trajectory (current, speed, angle, load: trajectory.hpp).
@@ -43,7 +47,7 @@ struct Hypothesis {
     double cost = 0;                 ///< trajectory cost after its fit (1 = at the noise floor)
     TrajectoryError error;
     int simulations = 0;
-    double tell_apart_ratio = 1.25;  ///< cost ratio by which the trajectory tells it from the one found
+    double tell_apart_ratio = kHypothesisRatio;  ///< cost ratio by which the trajectory tells it from the one found
 };
 
 /// One round: the screening, and the effect it added (if any) with the error after it.

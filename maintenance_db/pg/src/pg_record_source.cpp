@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <charconv>
-#include <cstring>
 #include <limits>
 #include <string_view>
 #include <tuple>
@@ -39,23 +38,16 @@ std::optional<double> opt_num(const Row& r, int c) { return r.is_null(c) ? std::
 std::optional<std::int64_t> opt_int(const Row& r, int c) { return r.is_null(c) ? std::nullopt : std::optional<std::int64_t>(integer(r.text(c))); }
 bool boolean(const Row& r, int c) { return r.text(c) == "t"; }
 
-constexpr const char* kSessionColumns =
-    "s.session_id, s.tail_number, s.actuator_serial, s.phase, s.started_utc, s.tool_version, s.verdict, s.verdict_note, s.limits_json, "
-    "s.position, coalesce(p.ata_reference, ''), coalesce(p.description, ''), s.cycles, s.hours_h, s.operator_id, s.technician_name, "
-    "s.technician_certificate, s.work_performed, s.source, s.limits_sha256, s.amends_session_id, s.correction_reason, s.prev_sha256, "
-    "s.content_sha256 FROM test_sessions s LEFT JOIN positions p ON p.position = s.position";
-
-/// The session columns without the three texts a report never shows (SessionListParts::limits_and_links
-/// false): empty strings in their places, as the SQLite store leaves them.
+/// The session columns of read_session. Without limits_and_links (SessionListParts), empty strings
+/// stand in for the three texts a report never shows, as the SQLite store leaves them.
 std::string session_columns(bool limits_and_links) {
-    std::string c = kSessionColumns;
-    if (!limits_and_links) {
-        for (const char* col : {"s.limits_json,", "s.limits_sha256,", "s.prev_sha256,"}) {
-            const std::size_t at = c.find(col);
-            c.replace(at, std::strlen(col) - 1, "''");
-        }
-    }
-    return c;
+    const auto col = [&](const char* c) { return limits_and_links ? std::string(c) : std::string("''"); };
+    return "s.session_id, s.tail_number, s.actuator_serial, s.phase, s.started_utc, s.tool_version, s.verdict, s.verdict_note, " +
+           col("s.limits_json") +
+           ", s.position, coalesce(p.ata_reference, ''), coalesce(p.description, ''), s.cycles, s.hours_h, s.operator_id, "
+           "s.technician_name, s.technician_certificate, s.work_performed, s.source, " +
+           col("s.limits_sha256") + ", s.amends_session_id, s.correction_reason, " + col("s.prev_sha256") +
+           ", s.content_sha256 FROM test_sessions s LEFT JOIN positions p ON p.position = s.position";
 }
 
 StoredTestSession read_session(const Row& r) {
