@@ -257,8 +257,12 @@ void Database::migrate() {
         throw DbError("database " + path_ + " has schema version " + std::to_string(have) +
                       ", newer than this emadiag understands (" + std::to_string(newest) + ")");
     }
+    if (have == newest) return;
+    // Every pending step in one transaction: the file moves from the version it had to the newest
+    // or not at all. A new file is never seen half-made (a kill -9 after step 1's commit once left
+    // a version-1 file with no test_sessions table), and an old one never stops at a middle version.
+    Transaction tx(*this);
     for (int v = have; v < newest; ++v) {
-        Transaction tx(*this);
         const auto count_rows = [this](const char* table) {
             Statement st(*this, std::string("SELECT count(*) FROM ") + table);
             st.step();
@@ -286,8 +290,8 @@ void Database::migrate() {
                 throw DbError("database " + path_ + ": migration to version " + std::to_string(v + 1) + " left a broken reference in table " +
                               fk.column_text(0) + "; nothing was changed");
         }
-        tx.commit();
     }
+    tx.commit();
 }
 
 Statement::Statement(Database& db, std::string_view sql) : db_(db), sql_(sql) {

@@ -378,6 +378,52 @@ TEST_F(StorageFaults, IoErrorAtEveryWriteOfATransactionNeverLeavesAPartialSessio
     EXPECT_GE(failed, total_writes - 1);
 }
 
+TEST_F(StorageFaults, IoErrorAtEveryWriteOfANewFileLeavesItEmptyOrAtTheNewestVersion) {
+    // A new file passes every schema step; a kill -9 or an I/O error on the way must leave it with
+    // no schema at all or the newest one, never a middle version (a version-1 file with no
+    // test_sessions table was once seen after a kill -9 of the first import).
+    int total_writes = 0;
+    int newest = 0;
+    {
+        ShimScope shim;
+        const int before = g_faults.writes;
+        db::Database d(path_);
+        total_writes = g_faults.writes - before;
+        newest = d.schema_version();
+    }
+    ASSERT_GT(total_writes, 2);
+    int failed = 0;
+    for (int n = 1; n <= total_writes + 1; ++n) {
+        fs::remove(path_);
+        fs::remove(path_ + "-journal");
+        {
+            ShimScope shim;
+            try {
+                g_faults.writes = 0;
+                g_faults.fail_from_write = n;
+                db::Database d(path_);
+            } catch (const db::DbError& e) {
+                EXPECT_THAT(e.what(), HasSubstr("disk I/O error")) << "write " << n;
+                ++failed;
+            }
+        }
+        RawDb raw(path_);
+        EXPECT_EQ(raw.text("PRAGMA integrity_check"), "ok") << "write " << n;
+        const std::string version = raw.text("PRAGMA user_version");
+        const std::string tables = raw.text("SELECT COUNT(*) FROM sqlite_schema");
+        if (version == "0") {
+            EXPECT_EQ(tables, "0") << "a version-0 file with tables after an I/O error at write " << n;
+        } else {
+            EXPECT_EQ(version, std::to_string(newest)) << "a middle schema version after an I/O error at write " << n;
+            EXPECT_EQ(raw.text("SELECT COUNT(*) FROM test_sessions"), "0") << "write " << n;
+        }
+        if (::testing::Test::HasFailure()) break;
+    }
+    std::cout << "I/O error injected at each of " << total_writes << " writes of a new file: " << failed
+              << " refused cleanly, none left at a middle version\n";
+    EXPECT_GE(failed, total_writes - 1);
+}
+
 // ---------------------------------------------------------------- corrupt, truncated, read-only
 std::string file_bytes(const std::string& p) {
     std::ifstream in(p, std::ios::binary);
