@@ -126,6 +126,43 @@ GenericScreen screen_generated(const RunSignals& s, const ScreenInput& in, const
     out.ranking = std::move(sorted);
     if (out.ranking.empty()) return out;
 
+    // Equivalent families: each one's fitted contribution (its best shape's columns with the model's
+    // columns projected out) reproduces the other's to R^2 >= kEquivalentR2 over the windows (e.g.
+    // sgn(w) F_R^2 and sgn(w) |theta_u| F_R^2 under a load that grows with the deflection).
+    std::vector<Eigen::MatrixXd> proj(lib.size());
+    std::vector<Eigen::VectorXd> fitted(lib.size());
+    for (std::size_t f : sorted_fam) {
+        if (best_cols[f].cols() == 0) continue;
+        proj[f] = wb.project_out(best_cols[f]);
+        fitted[f] = proj[f] * proj[f].colPivHouseholderQr().solve(e0);
+    }
+    auto reproduces = [&](std::size_t a, std::size_t b) {  // a's columns reproduce b's fitted contribution
+        const double ss = fitted[b].squaredNorm();
+        if (proj[a].cols() == 0 || !(ss > 0)) return false;
+        return 1.0 - residual_after(proj[a], fitted[b]).squaredNorm() / ss >= kEquivalentR2;
+    };
+    auto equivalent = [&](std::size_t a, std::size_t b) { return a == b || (reproduces(a, b) && reproduces(b, a)); };
+    // Parsimony: among the families equivalent to the best whose delta BIC is within kParsimonyBic of
+    // it (no evidence between them), the one with the fewest factors leads.
+    {
+        auto degree = [&](std::size_t i) {
+            std::size_t d = 0;
+            for (const auto& t : out.ranking[i].terms) d = std::max(d, t.factors.size());
+            return d;
+        };
+        std::size_t lead = 0;
+        for (std::size_t i = 1; i < out.ranking.size(); ++i) {
+            if (out.ranking[i].delta_bic < out.ranking.front().delta_bic - kParsimonyBic) break;
+            if (degree(i) < degree(lead) && equivalent(sorted_fam[i], sorted_fam.front())) lead = i;
+        }
+        if (lead != 0) {
+            std::rotate(out.ranking.begin(), out.ranking.begin() + static_cast<std::ptrdiff_t>(lead),
+                        out.ranking.begin() + static_cast<std::ptrdiff_t>(lead) + 1);
+            std::rotate(sorted_fam.begin(), sorted_fam.begin() + static_cast<std::ptrdiff_t>(lead),
+                        sorted_fam.begin() + static_cast<std::ptrdiff_t>(lead) + 1);
+        }
+    }
+
     GenericEvidence& top = out.ranking.front();
     const std::size_t top_fam = sorted_fam.front();
     // Block-time cross-validation: contiguous folds of windows.
@@ -168,6 +205,7 @@ GenericScreen screen_generated(const RunSignals& s, const ScreenInput& in, const
             const double nb = static_cast<double>(idx.size());
             double best = -std::numeric_limits<double>::infinity();
             double top_score = -std::numeric_limits<double>::infinity();
+            std::size_t best_f = top_fam;
             for (std::size_t i = 0; i < sorted_fam.size(); ++i) {
                 const std::size_t f = sorted_fam[i];
                 if (best_cols[f].cols() == 0) continue;
@@ -176,13 +214,17 @@ GenericScreen screen_generated(const RunSignals& s, const ScreenInput& in, const
                 const Eigen::VectorXd e1 = residual_after(xr, eb);
                 const double rb1 = std::max(e1.squaredNorm(), std::numeric_limits<double>::min());
                 const double score = nb * std::log(rb0 / rb1) - (best_k[f] + lib[f].scanned) * std::log(nb);
-                best = std::max(best, score);
+                if (score > best) {
+                    best = score;
+                    best_f = f;
+                }
                 if (f == top_fam) top_score = score;
             }
             // The family holds in this resample when it still passes the BIC with the Bonferroni
-            // allowance and no other family beats it by more than kStabilityTie (near-equivalent
-            // families, e.g. sgn(w) w^2 and sgn(w) w^2 |F_R|, share the wins otherwise).
-            wins += top_score - 2.0 * log_g > 0 && top_score >= best - kStabilityTie ? 1 : 0;
+            // allowance and no other family beats it by more than kStabilityTie, or the one that does
+            // is equivalent to it (near-equivalent families, e.g. sgn(w) w^2 and sgn(w) w^2 |F_R|,
+            // share the wins otherwise).
+            wins += top_score - 2.0 * log_g > 0 && (top_score >= best - kStabilityTie || equivalent(best_f, top_fam)) ? 1 : 0;
         }
         top.stability = static_cast<double>(wins) / kStabilityResamples;
     }

@@ -11,7 +11,11 @@
 //     held-out folds falls with the block (cv_gain > 0);
 //   - stability under subsampling: in at least kMinStability of kStabilityResamples moving-block
 //     bootstrap resamples of the windows, the family still passes the BIC (with the Bonferroni
-//     allowance) and no other family beats it by more than kStabilityTie;
+//     allowance) and no other family beats it by more than kStabilityTie, unless that family is
+//     equivalent to it (kEquivalentR2);
+//   - parsimony: of the families equivalent to the best within kParsimonyBic of its delta BIC, the
+//     one with the fewest factors is the best (it names the physics: friction ~ F_R^2, not
+//     ~ |theta_u| F_R^2 where the load follows the deflection);
 //   - peak torque |sum b_j x_j| >= kMinEffectPeakNm on the compared samples.
 #include "discovery/effect_screen.hpp"
 #include "discovery/term_library.hpp"
@@ -28,6 +32,13 @@ inline constexpr std::size_t kStabilityBlockWindows = 8;
 inline constexpr double kMinStability = 0.6;
 /// Penalised log-likelihood units by which another family may beat the best in a resample.
 inline constexpr double kStabilityTie = 2.0;
+/// Two families are equivalent on a run when each one's columns reproduce the other's fitted
+/// contribution to at least this R^2 (after the model's columns); a resample won by an equivalent
+/// family counts for the best.
+inline constexpr double kEquivalentR2 = 0.95;
+/// Among equivalent families within this delta BIC of the best (no evidence between them: Kass and
+/// Raftery's "not worth more than a bare mention"), the one with the fewest factors leads.
+inline constexpr double kParsimonyBic = 2.0;
 
 struct GenericEvidence {
     std::string family;

@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <functional>
 
 namespace emadiag::discovery {
 namespace {
@@ -138,6 +139,72 @@ TEST(OpenWorld, AFrictionAbsorbedIntoEtaIsToldFromAnEfficiencyLossByTheTrajector
     EXPECT_FALSE(worn.efficiency.equivalent) << worn.efficiency.verdict;
     EXPECT_TRUE(worn.added_effects().empty()) << worn.summary();
     EXPECT_NEAR(worn.model.params.eta_o, 0.78, 0.005);
+}
+
+emadiag::Run run_with_effects(std::uint64_t seed, const std::function<void(sim::Effects&)>& set) {
+    sim::SimConfig c;
+    c.load_case = sim::LoadCase::B;
+    c.sequence = sim::Sequence::Dyn;
+    c.noise = sim::NoiseProfile::Typical;
+    c.seed = seed;
+    set(c.params.effects);
+    return make_run(c, sim::simulate(c));
+}
+
+TEST(OpenWorld, ALibrarySpallAGeneratedFrictionTermMimicsIsOfferedToTheTrajectoryAndNamed) {
+    // A small spall near the centre of travel: on the torque residual a generated friction term
+    // (sgn(w) theta_u F_R, which also pulls eta_O off) scores as well as the spall; the library
+    // effect must still be a hypothesis, and the trajectory names it.
+    const DiscoveryReport r = discover(run_with_effects(4201, [](sim::Effects& e) {
+        e.spall_amplitude_nm = 0.0343;
+        e.spall_center_deg = -0.51;
+        e.spall_width_deg = 1.9;
+    }));
+    ASSERT_THAT(r.added_effects(), ElementsAre("spall")) << r.summary();
+    EXPECT_NEAR(r.model.params.effects.spall_amplitude_nm, 0.0343, 0.01);
+    EXPECT_NEAR(r.model.params.fdj_nm, 0.08, 0.004);
+    EXPECT_NEAR(r.model.params.eta_o, sim::EmaParams::datasheet().eta_o, 0.03);
+}
+
+TEST(OpenWorld, AMotorRippleTheTorqueWindowsAverageOutIsFoundByTheTrajectory) {
+    // At speed the ripple cancels within each sample; it shows only as cogging at rest and at
+    // reversals, which the trajectory sees.
+    const DiscoveryReport r = discover(run_with_effects(4202, [](sim::Effects& e) {
+        e.ripple_amplitude_nm = 0.030;
+        e.ripple_periods_per_rev = 6;
+    }));
+    ASSERT_THAT(r.added_effects(), ElementsAre("ripple")) << r.summary();
+    EXPECT_DOUBLE_EQ(r.model.params.effects.ripple_periods_per_rev, 6.0);
+    EXPECT_NEAR(r.model.params.effects.ripple_amplitude_nm, 0.030, 0.003);
+    EXPECT_LT(r.trajectory_after.cost, 2.0);
+    EXPECT_EQ(r.unexplained(), nullptr) << r.summary();
+}
+
+TEST(OpenWorld, OfEquivalentGeneratedTermsTheOneWithFewestFactorsNamesTheFriction) {
+    // In case B the load follows the deflection: sgn(w) F_R^2 and sgn(w) |theta_u| F_R^2 explain the
+    // torque equally; resamples split between them, and the simpler one names the physics.
+    const DiscoveryReport r = discover(run_with_term("torque: 0.243732*sgn(w)*sq(F_R)", 113002));
+    ASSERT_THAT(r.added_effects(), ElementsAre("friction_load_squared")) << r.summary();
+    EXPECT_NEAR(r.model.params.fdj_nm, 0.08, 0.004);
+}
+
+TEST(OpenWorld, APeriodicTorqueGetsItsPeriodClosely) {
+    // A period half a scan step off leaves a phase error growing over the travel, which reads as a
+    // position sensor drift; the second refinement finds the period to a fraction of a per cent.
+    const DiscoveryReport r = discover(run_with_term("torque: 0.075*sin(theta_u, 5)", 4204));
+    ASSERT_FALSE(r.steps.empty());
+    ASSERT_EQ(r.steps.front().name_key, "periodic_torque_surface") << r.summary();
+    bool seen = false;
+    for (const auto& t : r.model.params.terms) {
+        for (const auto& f : t.factors) {
+            if (f.basis == sim::TermBasis::Sin || f.basis == sim::TermBasis::Cos) {
+                EXPECT_NEAR(f.a, 5.0, 0.015) << t.text();
+                seen = true;
+            }
+        }
+    }
+    EXPECT_TRUE(seen);
+    EXPECT_TRUE(r.sensor_findings.empty()) << r.summary();
 }
 
 TEST(OpenWorld, AConstantTorqueIsToldApartFromSensorOffsetsByTheTrajectory) {
