@@ -145,56 +145,6 @@ struct Alternative {
     double tell_apart_ratio = kHypothesisRatio;
 };
 
-/// A periodic basis (sin or cos): its parameter a is the period.
-bool is_period_basis(const sim::TermFactor& f) { return f.basis == sim::TermBasis::Sin || f.basis == sim::TermBasis::Cos; }
-
-/// The period factor of a periodic block (sin/cos of an angle), or nullptr.
-const sim::TermFactor* period_factor(const sim::Term& t) {
-    for (const auto& f : t.factors) {
-        if (is_period_basis(f)) return &f;
-    }
-    return nullptr;
-}
-
-/// Library scan steps are 1.26 (motor angle) to 1.33 (surface angle): the refinement covers one
-/// step either side on a grid this many times finer.
-constexpr double kPeriodRefineSpan = 1.4;
-constexpr int kPeriodRefinePoints = 41;
-
-/// A periodic block's period refined on a grid finer than the library's scan, on the same torque
-/// residual and criterion. The scan's period can be off by half a step; the fit then leaves a beat
-/// in the residual that a second periodic term patches, in the other angle at the same periodicity
-/// (theta_m = tau theta_u), i.e. the same effect named twice. Returns the block unchanged when it is
-/// not periodic or no finer period does better.
-std::vector<sim::Term> refine_period(const RunSignals& s, const ScreenInput& in, const GenericEvidence& best,
-                                     std::uint64_t seed) {
-    if (best.terms.empty() || period_factor(best.terms.front()) == nullptr) return best.terms;
-    // Twice: over kPeriodRefineSpan, then over one step of that grid around its best (a period 0.8 %
-    // off, half a step of the first grid, leaves a phase error that grows over the travel and reads as
-    // a position sensor drift: seed 113's periodic surface torque of period 5 deg found at 4.961).
-    GenericEvidence current = best;
-    double span = kPeriodRefineSpan;
-    for (int pass = 0; pass < 2; ++pass) {
-        const double p0 = period_factor(current.terms.front())->a;
-        TermFamily fam{current.family, {}, 1};
-        for (int i = 0; i < kPeriodRefinePoints; ++i) {
-            const double x = -1.0 + 2.0 * i / (kPeriodRefinePoints - 1);
-            const double period = p0 * std::pow(span, x);
-            std::vector<sim::Term> block = current.terms;
-            for (auto& t : block) {
-                t.coefficient = 1.0;
-                for (auto& f : t.factors) {
-                    if (is_period_basis(f)) f.a = period;
-                }
-            }
-            fam.shapes.push_back(std::move(block));
-        }
-        const GenericScreen fine = screen_generated(s, in, {fam}, seed);
-        if (!fine.ranking.empty() && fine.ranking.front().delta_bic > current.delta_bic) current = fine.ranking.front();
-        span = std::pow(span, 2.0 / (kPeriodRefinePoints - 1));
-    }
-    return current.terms;
-}
 
 /// The same periodicity in the other angle: a period in theta_u (deg) as one in theta_m (rad), and
 /// back (theta_m = tau theta_u).

@@ -113,12 +113,13 @@ AcrossRunsReport discover_runs(const std::vector<Run>& runs, const std::vector<s
         in.mask = all_mask;
         out.joint = screen_generated(all, in, generated_library(all));
         if (!out.joint.ranking.empty() && out.joint.ranking.front().accepted) {
-            const GenericEvidence& g = out.joint.ranking.front();
+            // A periodic block's period refined as for one run (on the stacked residual).
+            const std::vector<sim::Term> joint_terms = refine_period(all, in, out.joint.ranking.front(), 1);
             // Confirmation: the joint terms added to every run's own model, re-simulated.
             double before = 0, after = 0;
             for (std::size_t i = 0; i < out.reports.size(); ++i) {
                 sim::EmaParams q = out.reports[i].model.params;
-                for (const auto& t : g.terms) q.terms.push_back(t);
+                for (const auto& t : joint_terms) q.terms.push_back(t);
                 const RunSignals m = run_signals(resimulate(*analysed[i], q));
                 const double b = trajectory_error(own[i], sims[i], out.reports[i].floor).cost;
                 const double a = trajectory_error(own[i], m, out.reports[i].floor).cost;
@@ -129,8 +130,8 @@ AcrossRunsReport discover_runs(const std::vector<Run>& runs, const std::vector<s
             }
             out.joint_confirmed = after < before;
             if (out.joint_confirmed) {
-                out.joint_terms = g.terms;
-                const PhysicsName n = physics_name(g.terms.front());
+                out.joint_terms = joint_terms;
+                const PhysicsName n = physics_name(joint_terms.front());
                 out.joint_key = n.key;
                 out.joint_text = n.text;
             }

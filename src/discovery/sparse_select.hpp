@@ -65,4 +65,22 @@ struct GenericScreen {
 [[nodiscard]] GenericScreen screen_generated(const RunSignals& s, const ScreenInput& in,
                                              const std::vector<TermFamily>& lib, std::uint64_t seed = 1);
 
+/// A periodic basis (sin or cos): its parameter a is the period.
+[[nodiscard]] bool is_period_basis(const sim::TermFactor& f);
+/// The period factor of a periodic block (sin/cos of an angle), or nullptr.
+[[nodiscard]] const sim::TermFactor* period_factor(const sim::Term& t);
+
+/// Library scan steps are 1.26 (motor angle) to 1.33 (surface angle): the refinement covers one
+/// step either side on a grid this many times finer.
+inline constexpr double kPeriodRefineSpan = 1.4;
+inline constexpr int kPeriodRefinePoints = 41;
+
+/// A periodic block's period refined on a grid finer than the library's scan, on the same torque
+/// residual and criterion (twice: over kPeriodRefineSpan, then over one step of that grid). The scan's
+/// period can be off by half a step; the fit then leaves a beat in the residual that a second periodic
+/// term patches (the same effect named twice), or a phase error growing over the travel that reads as
+/// a position drift. Returns the block unchanged when it is not periodic or no finer period does better.
+[[nodiscard]] std::vector<sim::Term> refine_period(const RunSignals& s, const ScreenInput& in, const GenericEvidence& best,
+                                                   std::uint64_t seed);
+
 }  // namespace emadiag::discovery
