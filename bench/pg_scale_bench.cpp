@@ -142,8 +142,8 @@ int main(int argc, char** argv) {
         so.batch_sessions = batch;
         std::int64_t batches = 0;
         const auto t_sync = Clock::now();
-        so.progress = [&](const std::string&) {
-            if (++batches % 50 == 0) {
+        so.progress = [&](const std::string& line) {
+            if (line.ends_with(" committed") && ++batches % 50 == 0) {
                 const double s = seconds_since(t_sync);
                 std::printf("  %lld sessions, %.0f sessions/s so far\n", static_cast<long long>(batches) * static_cast<long long>(batch),
                             static_cast<double>(batches) * static_cast<double>(batch) / s);

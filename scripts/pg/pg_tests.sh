@@ -124,12 +124,18 @@ for _ in $(seq 1 100); do [ "$(admin -c "SELECT count(*) FROM pg_stat_activity W
 nc_server=$(admin -c "SELECT count(*) FROM test_sessions WHERE station_role = 'station_c'")
 nc_recorded=$(sqlite3 c.db "SELECT count(*) FROM synced_sessions")
 cat sync_c1.txt
-echo "kill -9: sync caught inside its transaction: $caught (active backend: $inflight), exit status $rck; server has $nc_server of $(count c.db) sessions, station recorded $nc_recorded"
-if [ $caught = 1 ] && [ $rck = 137 ] && [ "$nc_server" -lt "$(count c.db)" ] &&
+# The sync reads the next batch from the station while the server inserts this one: the batch read
+# ahead when the kill came is neither on the server nor in the station's record.
+ahead=$(grep -o 'sessions [0-9]*\.\.[0-9]* read ahead' sync_c1.txt | tail -1 | grep -o '[0-9][0-9]*' | head -1)
+ahead_held=$(admin -c "SELECT count(*) FROM test_sessions WHERE station_role = 'station_c' AND station_session_id >= ${ahead:-0}")
+ahead_recorded=$(sqlite3 c.db "SELECT count(*) FROM synced_sessions WHERE session_id >= ${ahead:-0}")
+echo "kill -9: sync caught inside its transaction: $caught (active backend: $inflight), exit status $rck; server has $nc_server of $(count c.db) sessions, station recorded $nc_recorded; the batch read ahead from session ${ahead:-none}: $ahead_held on the server, $ahead_recorded recorded"
+if [ $caught = 1 ] && [ $rck = 137 ] && [ "$nc_server" -lt "$(count c.db)" ] && [ "$nc_recorded" -le "$nc_server" ] &&
+   [ -n "$ahead" ] && [ "$ahead" -gt "$nc_server" ] && [ "$ahead_held" = 0 ] && [ "$ahead_recorded" = 0 ] &&
    diff <(station_detail c.db "WHERE s.session_id <= $nc_server") <(server_detail c.db) > /dev/null &&
    [ "$(admin -c "SELECT count(*) FROM session_measurements m JOIN test_sessions s ON s.session_id = m.session_id WHERE s.station_role = 'station_c'")" -le $((nc_server * 4)) ]; then
-  pass "after kill -9 mid-transaction the server holds $nc_server whole sessions and no part of the killed batch"
-else fail "after kill -9: caught=$caught rc=$rck server=$nc_server; $(diff <(station_detail c.db "WHERE s.session_id <= $nc_server") <(server_detail c.db) | head -3)"; fi
+  pass "after kill -9 mid-transaction the server holds $nc_server whole sessions and no part of the killed batch nor of the one read ahead (from session $ahead); the station records $nc_recorded"
+else fail "after kill -9: caught=$caught rc=$rck server=$nc_server recorded=$nc_recorded ahead=${ahead:-none} ($ahead_held held, $ahead_recorded recorded); $(diff <(station_detail c.db "WHERE s.session_id <= $nc_server") <(server_detail c.db) | head -3)"; fi
 # The other window: the server committed, the station had not yet recorded it (kill between the two).
 sqlite3 c.db "DELETE FROM synced_sessions WHERE session_id > (SELECT max(session_id) - 2 FROM synced_sessions)"
 out="$("$E" sync --db c.db --to "$(uri fleet station_c)" --batch 4 2>&1)"; rc=$?

@@ -76,7 +76,9 @@ void add_station_role(PgConnection& pg, const std::string& role);
 struct SyncOptions {
     std::size_t batch_sessions = 20000;  ///< whole sessions per PostgreSQL transaction (docs/fleet-server.md: why so many)
     int max_retries = 20;               ///< on deadlock or a concurrent sync of the same file
-    std::function<void(const std::string&)> progress;  ///< one line per committed batch (may be empty)
+    /// One line per committed batch, and one per batch read ahead from the station while the server
+    /// inserts the one before (may be empty; called from the sync's two threads, never at once).
+    std::function<void(const std::string&)> progress;
 };
 struct SyncResult {
     std::string station_uuid;
