@@ -15,28 +15,11 @@ using Row = PgConnection::RowView;
 
 std::string text(const Row& r, int c) { return std::string(r.text(c)); }
 std::optional<std::string> opt_text(const Row& r, int c) { return r.is_null(c) ? std::nullopt : std::optional<std::string>(r.text(c)); }
-double number(std::string_view s) {
-    double v = 0;
-    const auto res = std::from_chars(s.data(), s.data() + s.size(), v);
-    if (res.ec != std::errc() || res.ptr != s.data() + s.size()) {
-        if (s == "NaN") return std::numeric_limits<double>::quiet_NaN();
-        if (s == "Infinity") return std::numeric_limits<double>::infinity();
-        if (s == "-Infinity") return -std::numeric_limits<double>::infinity();
-        throw DbError("fleet server: '" + std::string(s) + "' is not a number");
-    }
-    return v;
-}
-std::int64_t integer(std::string_view s) {
-    std::int64_t v = 0;
-    const auto res = std::from_chars(s.data(), s.data() + s.size(), v);
-    if (res.ec != std::errc() || res.ptr != s.data() + s.size()) throw DbError("fleet server: '" + std::string(s) + "' is not an integer");
-    return v;
-}
-double num(const Row& r, int c) { return number(r.text(c)); }
-std::int64_t int_of(const Row& r, int c) { return integer(r.text(c)); }
-std::optional<double> opt_num(const Row& r, int c) { return r.is_null(c) ? std::nullopt : std::optional<double>(number(r.text(c))); }
-std::optional<std::int64_t> opt_int(const Row& r, int c) { return r.is_null(c) ? std::nullopt : std::optional<std::int64_t>(integer(r.text(c))); }
-bool boolean(const Row& r, int c) { return r.text(c) == "t"; }
+double num(const Row& r, int c) { return r.real(c); }
+std::int64_t int_of(const Row& r, int c) { return r.integer(c); }
+std::optional<double> opt_num(const Row& r, int c) { return r.is_null(c) ? std::nullopt : std::optional<double>(r.real(c)); }
+std::optional<std::int64_t> opt_int(const Row& r, int c) { return r.is_null(c) ? std::nullopt : std::optional<std::int64_t>(r.integer(c)); }
+bool boolean(const Row& r, int c) { return r.boolean(c); }
 
 /// The session columns of read_session. Without limits_and_links (SessionListParts), empty strings
 /// stand in for the three texts a report never shows, as the SQLite store leaves them.
@@ -130,55 +113,85 @@ std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string&
                                                               bool by_tail) {
     std::vector<StoredTestSession> out;
     std::unordered_map<std::int64_t, std::size_t> index;
-    pg_.each_row("SELECT " + session_columns(parts.limits_and_links) + " WHERE " + where + " ORDER BY s.started_utc, s.session_id", {value},
-                 [&](const Row& r) {
-        out.push_back(read_session(r));
-        index[out.back().session_id] = out.size() - 1;
-    });
-    if (out.empty()) return out;
-    // The rows of these sessions by their ids (index scans on each table's key), not by a join on the
-    // condition: the planner's join over the whole fleet's findings is what a report cannot afford.
-    // A tail's findings on schema 3: one range of the index (tail_number, session_id, parameter, estimator)
-    // that holds every column the report reads (an index-only scan once vacuum has marked the pages).
-    // The sessions of a serial: by their tails and ids (schema 3 has no index of findings by session id alone).
-    const std::string id_array = bigint_array(out, [](const StoredTestSession& s) { return s.session_id; });
-    std::string findings_where = "f.session_id = ANY($1::bigint[])";
-    std::vector<std::optional<std::string>> findings_params{id_array};
+    // Findings arrive ordered by session, the sessions by time: each finding waits here until its
+    // session has been read (by tail, the two queries go in one round trip; see below).
+    std::vector<std::pair<std::int64_t, StoredFinding>> findings;
+    const auto read_finding = [&](const Row& r) {
+        if (r.row() == 0) findings.reserve(static_cast<std::size_t>(r.row_count()));
+        StoredFinding f;
+        f.parameter = text(r, 1);
+        f.estimator = text(r, 2);
+        f.value = opt_num(r, 3);
+        f.std_error = opt_num(r, 4);
+        f.limit_value = opt_num(r, 5);
+        f.limit_kind = text(r, 6);
+        f.status = text(r, 7);
+        f.note = text(r, 8);
+        findings.emplace_back(int_of(r, 0), std::move(f));
+    };
+    const std::string findings_sql =
+        "SELECT f.session_id, f.parameter, f.estimator, f.value, f.std_error, f.limit_value, f.limit_kind, f.status, f.note FROM findings f WHERE ";
+    const std::string findings_order = " ORDER BY f.session_id, f.parameter, f.estimator";
+    PgConnection::Query sessions{"SELECT " + session_columns(parts.limits_and_links) + " WHERE " + where + " ORDER BY s.started_utc, s.session_id",
+                                 {value}, true, [&](const Row& r) {
+                                     if (r.row() == 0) {
+                                         out.reserve(static_cast<std::size_t>(r.row_count()));
+                                         index.reserve(static_cast<std::size_t>(r.row_count()));
+                                     }
+                                     out.push_back(read_session(r));
+                                     index[out.back().session_id] = out.size() - 1;
+                                 }};
+    // Both in the binary format: the numbers come as their bytes (no text to print and parse).
     if (schema_version_ >= 3 && by_tail) {
-        findings_where = "f.tail_number = $1";
-        findings_params = {value};
-    } else if (schema_version_ >= 3) {
-        std::vector<std::string> tails;
-        for (const auto& s : out) tails.push_back(s.tail_number);
-        std::sort(tails.begin(), tails.end());
-        tails.erase(std::unique(tails.begin(), tails.end()), tails.end());
-        std::string a;
-        for (const auto& t : tails) {
-            a += a.empty() ? "{\"" : ",\"";
-            for (const char c : t) {
-                if (c == '"' || c == '\\') a += '\\';
-                a += c;
+        // A tail's findings on schema 3: one range of the index (tail_number, session_id, parameter, estimator)
+        // that holds every column the report reads (an index-only scan once vacuum has marked the pages).
+        // They do not depend on the sessions' rows, so both queries go at once (pipeline mode): the
+        // server looks up the findings while the sessions are read here.
+        pg_.each_row({std::move(sessions), {findings_sql + "f.tail_number = $1" + findings_order, {value}, true, read_finding}});
+    } else {
+        pg_.each_row({std::move(sessions)});
+        if (out.empty()) return out;
+        // The rows of these sessions by their ids (index scans on each table's key), not by a join on the
+        // condition: the planner's join over the whole fleet's findings is what a report cannot afford.
+        // The sessions of a serial: by their tails and ids (schema 3 has no index of findings by session id alone).
+        const std::string id_array = bigint_array(out, [](const StoredTestSession& s) { return s.session_id; });
+        std::string findings_where = "f.session_id = ANY($1::bigint[])";
+        std::vector<std::optional<std::string>> findings_params{id_array};
+        if (schema_version_ >= 3) {
+            std::vector<std::string> tails;
+            for (const auto& s : out) tails.push_back(s.tail_number);
+            std::sort(tails.begin(), tails.end());
+            tails.erase(std::unique(tails.begin(), tails.end()), tails.end());
+            std::string a;
+            for (const auto& t : tails) {
+                a += a.empty() ? "{\"" : ",\"";
+                for (const char c : t) {
+                    if (c == '"' || c == '\\') a += '\\';
+                    a += c;
+                }
+                a += '"';
             }
-            a += '"';
+            findings_where = "f.tail_number = ANY($2::text[]) AND f.session_id = ANY($1::bigint[])";
+            findings_params = {id_array, a + "}"};
         }
-        findings_where = "f.tail_number = ANY($2::text[]) AND f.session_id = ANY($1::bigint[])";
-        findings_params = {id_array, a + "}"};
+        pg_.each_row({{findings_sql + findings_where + findings_order, findings_params, true, read_finding}});
     }
-    pg_.each_row(
-        "SELECT f.session_id, f.parameter, f.estimator, f.value, f.std_error, f.limit_value, f.limit_kind, f.status, f.note FROM findings f WHERE " +
-            findings_where + " ORDER BY f.session_id, f.parameter, f.estimator",
-        findings_params, [&](const Row& r) {
-            StoredFinding f;
-            f.parameter = text(r, 1);
-            f.estimator = text(r, 2);
-            f.value = opt_num(r, 3);
-            f.std_error = opt_num(r, 4);
-            f.limit_value = opt_num(r, 5);
-            f.limit_kind = text(r, 6);
-            f.status = text(r, 7);
-            f.note = text(r, 8);
-            out[index.at(int_of(r, 0))].findings.push_back(std::move(f));
-        });
+    if (out.empty()) return out;
+    // A session's findings are consecutive (ordered by session): one look-up and one allocation per session.
+    for (std::size_t i = 0; i < findings.size();) {
+        const std::int64_t session_id = findings[i].first;
+        std::size_t end = i;
+        while (end < findings.size() && findings[end].first == session_id) ++end;
+        const auto it = index.find(session_id);
+        if (it == index.end())  // by tail: a finding whose session has another tail (the server's check refuses that)
+            throw DbError("fleet server " + pg_.uri() + ": a finding of session " + std::to_string(session_id) + " is not among the sessions where " +
+                          where + " ($1 = " + value + ")");
+        auto& to = out[it->second].findings;
+        to.reserve(to.size() + (end - i));
+        for (; i < end; ++i) to.push_back(std::move(findings[i].second));
+    }
+    findings = {};
+    const std::string id_array = bigint_array(out, [](const StoredTestSession& s) { return s.session_id; });
     if (parts.artifacts)
         pg_.each_row(
             "SELECT a.session_id, a.role, a.name, a.sha256 FROM session_artifacts a WHERE a.session_id = ANY($1::bigint[]) "

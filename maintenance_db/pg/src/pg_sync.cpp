@@ -26,6 +26,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 constexpr std::size_t kRawChunkBytes = 1 << 20;  // raw log chunk: at most 1 MiB on either side
 constexpr std::int64_t kRecoverPage = 50000;
+constexpr int kReaderCacheKiB = 16 * 1024;  // the reader thread's SQLite page cache
 
 std::string d2s(double v) {
     char buf[64];
@@ -191,7 +192,11 @@ struct PreparedBatch {
 std::unique_ptr<Database> open_reader(const Database& station) {
     const std::string& path = station.path();
     if (path.empty() || path == ":memory:") return nullptr;
-    return std::make_unique<Database>(path, station.busy_timeout_ms(), false);  // the caller's connection checked the file
+    auto reader = std::make_unique<Database>(path, station.busy_timeout_ms(), false);  // the caller's connection checked the file
+    // It reads each page once, in order: no need for the cache a writing connection keeps (256 MiB),
+    // which would double the sync's memory.
+    reader->exec("PRAGMA cache_size = -" + std::to_string(kReaderCacheKiB));
+    return reader;
 }
 
 class Syncer {

@@ -41,8 +41,16 @@ public:
     class RowView {
     public:
         RowView(const pg_result* result, int row) : result_(result), row_(row) {}
+        [[nodiscard]] int row() const { return row_; }
+        [[nodiscard]] int row_count() const;  ///< the rows of this result (to reserve room at row 0)
         [[nodiscard]] bool is_null(int column) const;
-        [[nodiscard]] std::string_view text(int column) const;  ///< "" for NULL
+        [[nodiscard]] std::string_view text(int column) const;  ///< "" for NULL; a text column's bytes in either result format
+        /// An integer column (int2, int4, int8) of a text or a binary result; DbError when it is not one.
+        [[nodiscard]] std::int64_t integer(int column) const;
+        /// A float8 or float4 column of a text or a binary result (the same double either way); DbError when it is not one.
+        [[nodiscard]] double real(int column) const;
+        /// A boolean column of a text or a binary result.
+        [[nodiscard]] bool boolean(int column) const;
     private:
         const pg_result* result_;
         int row_;
@@ -50,6 +58,18 @@ public:
     /// As query, but hands each row to `f` where it lies in libpq's result (a report reads thousands
     /// of rows: no vector of strings in between).
     void each_row(const std::string& sql, const std::vector<std::optional<std::string>>& params, const std::function<void(const RowView&)>& f);
+    /// One query of each_rows: with `binary`, the rows come in PostgreSQL's binary format (a double as
+    /// its 8 bytes: no text to print on the server nor to parse here; read numbers with integer and real).
+    struct Query {
+        std::string sql;
+        std::vector<std::optional<std::string>> params;
+        bool binary = false;
+        std::function<void(const RowView&)> on_row;
+    };
+    /// Several queries sent at once (libpq's pipeline mode: one round trip), their rows handed over in
+    /// order: the server runs the next query while the rows of one are read here. The first error
+    /// is thrown after every result has been read (the queries after it are not run).
+    void each_row(const std::vector<Query>& queries);
     void exec(const std::string& sql);
     /// COPY table (columns) FROM STDIN: rows given as text-format lines through `fill`, which calls
     /// `put` as often as it likes (sent on in pieces of about 1 MiB, so memory stays bounded).
