@@ -293,9 +293,16 @@ private:
     std::vector<std::int64_t> reserve(const std::string& table, const std::string& col, std::size_t n) {
         std::vector<std::int64_t> ids;
         if (n == 0) return ids;
-        for (const auto& r : pg_.query("SELECT nextval(pg_get_serial_sequence('" + table + "', '" + col + "')) FROM generate_series(1, $1)",
-                                       {std::to_string(n)}))
-            ids.push_back(to_i64(*r[0]));
+        // The sequence named once, as a literal the parser turns into its OID: pg_get_serial_sequence
+        // in the statement was evaluated for every id (1.7 s of the server's 33 s for 240,000 sessions).
+        auto& nextval = nextval_sql_[table + "." + col];
+        if (nextval.empty()) {
+            const auto seq = pg_.query("SELECT quote_literal(pg_get_serial_sequence($1, $2))", {table, col});
+            if (seq.empty() || !seq[0][0])
+                throw DbError("fleet server " + server_ + ": " + table + "." + col + " has no sequence", DbErrorKind::Invalid);
+            nextval = "SELECT nextval(" + *seq[0][0] + "::regclass) FROM generate_series(1, $1)";
+        }
+        for (const auto& r : pg_.query(nextval, {std::to_string(n)})) ids.push_back(to_i64(*r[0]));
         std::sort(ids.begin(), ids.end());
         return ids;
     }
@@ -741,6 +748,7 @@ private:
     std::unique_ptr<Database> reader_;  ///< the reader thread's connection to the station file
     std::mutex station_gate_;           ///< held while a batch is read from the station, and while one is recorded in it
     std::mutex progress_mutex_;
+    std::map<std::string, std::string> nextval_sql_;  ///< per table.column: the statement that reserves its ids
     PgConnection pg_;
     std::string server_;
     SyncOptions o_;
