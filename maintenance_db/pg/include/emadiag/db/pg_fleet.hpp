@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -137,6 +138,8 @@ private:
     std::vector<StoredTestSession> sessions_where(const std::string& where, const std::string& value, const SessionListParts& parts, bool by_tail);
     PgConnection pg_;
     int schema_version_ = 0;
+    /// The positions' ATA reference and description (position -> both), read once in the snapshot.
+    std::optional<std::map<std::string, std::pair<std::string, std::string>>> places_;
 };
 
 /// A RecordSource for --db: a fleet server for a postgresql:// URI, else the SQLite file (opened and
