@@ -129,12 +129,21 @@ std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string&
                                                               bool by_tail) {
     std::vector<StoredTestSession> out;
     std::unordered_map<std::int64_t, std::size_t> index;
-    // Findings arrive ordered by session, the sessions by time: each finding waits here until its
-    // session has been read (by tail, the two queries go in one round trip; see below).
-    std::vector<std::pair<std::int64_t, StoredFinding>> findings;
+    // The findings arrive after the sessions (in the same pipeline, or by their ids), ordered by session:
+    // each goes straight to its session, one look-up per session.
+    std::vector<StoredFinding>* to = nullptr;
+    std::int64_t to_id = 0;
     const auto read_finding = [&](const Row& r) {
-        if (r.row() == 0) findings.reserve(static_cast<std::size_t>(r.row_count()));
-        StoredFinding f;
+        const std::int64_t session_id = int_of(r, 0);
+        if (to == nullptr || session_id != to_id) {
+            const auto it = index.find(session_id);
+            if (it == index.end())  // by tail: a finding whose session has another tail (the server's check refuses that)
+                throw DbError("fleet server " + pg_.uri() + ": a finding of session " + std::to_string(session_id) +
+                              " is not among the sessions where " + where + " ($1 = " + value + ")");
+            to = &out[it->second].findings;
+            to_id = session_id;
+        }
+        StoredFinding& f = to->emplace_back();
         f.parameter = text(r, 1);
         f.estimator = text(r, 2);
         f.value = opt_num(r, 3);
@@ -143,7 +152,6 @@ std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string&
         f.limit_kind = text(r, 6);
         f.status = text(r, 7);
         f.note = text(r, 8);
-        findings.emplace_back(int_of(r, 0), std::move(f));
     };
     const std::string findings_sql =
         "SELECT f.session_id, f.parameter, f.estimator, f.value, f.std_error, f.limit_value, f.limit_kind, f.status, f.note FROM findings f WHERE ";
@@ -214,20 +222,6 @@ std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string&
         pg_.each_row({{findings_sql + findings_where + findings_order, findings_params, true, read_finding}});
     }
     if (out.empty()) return out;
-    // A session's findings are consecutive (ordered by session): one look-up and one allocation per session.
-    for (std::size_t i = 0; i < findings.size();) {
-        const std::int64_t session_id = findings[i].first;
-        std::size_t end = i;
-        while (end < findings.size() && findings[end].first == session_id) ++end;
-        const auto it = index.find(session_id);
-        if (it == index.end())  // by tail: a finding whose session has another tail (the server's check refuses that)
-            throw DbError("fleet server " + pg_.uri() + ": a finding of session " + std::to_string(session_id) + " is not among the sessions where " +
-                          where + " ($1 = " + value + ")");
-        auto& to = out[it->second].findings;
-        to.reserve(to.size() + (end - i));
-        for (; i < end; ++i) to.push_back(std::move(findings[i].second));
-    }
-    findings = {};
     const std::string id_array = bigint_array(out, [](const StoredTestSession& s) { return s.session_id; });
     if (parts.artifacts)
         pg_.each_row(
