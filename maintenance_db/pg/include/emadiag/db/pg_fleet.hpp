@@ -112,7 +112,9 @@ struct SyncResult {
 /// sessions is one PostgreSQL transaction; what the server committed is recorded in the station's
 /// tables synced_sessions / synced_discovery_findings (schema/005_sync.sql). A sync killed at any
 /// point leaves no partial session on the server, and the next sync records what was committed and
-/// pushes the rest.
+/// pushes the rest. While the server inserts one batch, a second thread reads the next from the
+/// station file on its own connection (one batch ahead at most; none for a ":memory:" station,
+/// which is read in turn).
 SyncResult sync_to_fleet(Database& station, const std::string& uri, const SyncOptions& options = {});
 
 /// The reports' view of a fleet server.
