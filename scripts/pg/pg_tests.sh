@@ -212,6 +212,16 @@ same "trend N1EM text" trend --tail N1EM --phase all --draws 500
 same "trend N2EM json" trend --tail N2EM --format json --draws 500
 out="$("$E" report --db "$U" --tail N9ZZ 2>&1)"; rc=$?
 [ $rc -ne 0 ] && grep -q "is not in" <<< "$out" && pass "an unknown tail from PostgreSQL: $(head -1 <<< "$out" | cut -c1-120)" || fail "unknown tail: $out"
+# A query that fails inside the report's pipeline (the tail's sessions, then its findings, in one round
+# trip): the server's error comes out whole, the command fails at once (no wait for results that
+# never come), and with the grant back the report is the same as before.
+DB=fleet1 admin -c "REVOKE SELECT ON findings FROM emadiag_station"
+out="$(timeout 60 "$E" report --db "$U" --tail N1EM 2>&1)"; rc=$?
+DB=fleet1 admin -c "GRANT SELECT ON findings TO emadiag_station"
+if [ $rc -ne 0 ] && [ $rc -ne 124 ] && grep -q "permission denied for table findings" <<< "$out" && grep -q "SQLSTATE 42501" <<< "$out"; then
+  pass "an error inside the report's pipeline: exit $rc, $(grep -m1 -o 'fleet server: .*' <<< "$out" | cut -c1-140)"
+else fail "an error inside the report's pipeline: exit $rc: $out"; fi
+same "report N1EM --format json, the findings' grant given back" report --tail N1EM --format json --draws 500
 
 # An actuator moved from one tail to another: the report reads its sessions on the other tail too
 # (serial_seen_elsewhere, sessions_of_serial: by tails and ids on schema 3).
