@@ -124,12 +124,18 @@ for _ in $(seq 1 100); do [ "$(admin -c "SELECT count(*) FROM pg_stat_activity W
 nc_server=$(admin -c "SELECT count(*) FROM test_sessions WHERE station_role = 'station_c'")
 nc_recorded=$(sqlite3 c.db "SELECT count(*) FROM synced_sessions")
 cat sync_c1.txt
-echo "kill -9: sync caught inside its transaction: $caught (active backend: $inflight), exit status $rck; server has $nc_server of $(count c.db) sessions, station recorded $nc_recorded"
-if [ $caught = 1 ] && [ $rck = 137 ] && [ "$nc_server" -lt "$(count c.db)" ] &&
+# The sync reads the next batch from the station while the server inserts this one: the batch read
+# ahead when the kill came is neither on the server nor in the station's record.
+ahead=$(grep -o 'sessions [0-9]*\.\.[0-9]* read ahead' sync_c1.txt | tail -1 | grep -o '[0-9][0-9]*' | head -1)
+ahead_held=$(admin -c "SELECT count(*) FROM test_sessions WHERE station_role = 'station_c' AND station_session_id >= ${ahead:-0}")
+ahead_recorded=$(sqlite3 c.db "SELECT count(*) FROM synced_sessions WHERE session_id >= ${ahead:-0}")
+echo "kill -9: sync caught inside its transaction: $caught (active backend: $inflight), exit status $rck; server has $nc_server of $(count c.db) sessions, station recorded $nc_recorded; the batch read ahead from session ${ahead:-none}: $ahead_held on the server, $ahead_recorded recorded"
+if [ $caught = 1 ] && [ $rck = 137 ] && [ "$nc_server" -lt "$(count c.db)" ] && [ "$nc_recorded" -le "$nc_server" ] &&
+   [ -n "$ahead" ] && [ "$ahead" -gt "$nc_server" ] && [ "$ahead_held" = 0 ] && [ "$ahead_recorded" = 0 ] &&
    diff <(station_detail c.db "WHERE s.session_id <= $nc_server") <(server_detail c.db) > /dev/null &&
    [ "$(admin -c "SELECT count(*) FROM session_measurements m JOIN test_sessions s ON s.session_id = m.session_id WHERE s.station_role = 'station_c'")" -le $((nc_server * 4)) ]; then
-  pass "after kill -9 mid-transaction the server holds $nc_server whole sessions and no part of the killed batch"
-else fail "after kill -9: caught=$caught rc=$rck server=$nc_server; $(diff <(station_detail c.db "WHERE s.session_id <= $nc_server") <(server_detail c.db) | head -3)"; fi
+  pass "after kill -9 mid-transaction the server holds $nc_server whole sessions and no part of the killed batch nor of the one read ahead (from session $ahead); the station records $nc_recorded"
+else fail "after kill -9: caught=$caught rc=$rck server=$nc_server recorded=$nc_recorded ahead=${ahead:-none} ($ahead_held held, $ahead_recorded recorded); $(diff <(station_detail c.db "WHERE s.session_id <= $nc_server") <(server_detail c.db) | head -3)"; fi
 # The other window: the server committed, the station had not yet recorded it (kill between the two).
 sqlite3 c.db "DELETE FROM synced_sessions WHERE session_id > (SELECT max(session_id) - 2 FROM synced_sessions)"
 out="$("$E" sync --db c.db --to "$(uri fleet station_c)" --batch 4 2>&1)"; rc=$?
@@ -206,6 +212,16 @@ same "trend N1EM text" trend --tail N1EM --phase all --draws 500
 same "trend N2EM json" trend --tail N2EM --format json --draws 500
 out="$("$E" report --db "$U" --tail N9ZZ 2>&1)"; rc=$?
 [ $rc -ne 0 ] && grep -q "is not in" <<< "$out" && pass "an unknown tail from PostgreSQL: $(head -1 <<< "$out" | cut -c1-120)" || fail "unknown tail: $out"
+# A query that fails inside the report's pipeline (the tail's sessions, then its findings, in one round
+# trip): the server's error comes out whole, the command fails at once (no wait for results that
+# never come), and with the grant back the report is the same as before.
+DB=fleet1 admin -c "REVOKE SELECT ON findings FROM emadiag_station"
+out="$(timeout 60 "$E" report --db "$U" --tail N1EM 2>&1)"; rc=$?
+DB=fleet1 admin -c "GRANT SELECT ON findings TO emadiag_station"
+if [ $rc -ne 0 ] && [ $rc -ne 124 ] && grep -q "permission denied for table findings" <<< "$out" && grep -q "SQLSTATE 42501" <<< "$out"; then
+  pass "an error inside the report's pipeline: exit $rc, $(grep -m1 -o 'fleet server: .*' <<< "$out" | cut -c1-140)"
+else fail "an error inside the report's pipeline: exit $rc: $out"; fi
+same "report N1EM --format json, the findings' grant given back" report --tail N1EM --format json --draws 500
 
 # An actuator moved from one tail to another: the report reads its sessions on the other tail too
 # (serial_seen_elsewhere, sessions_of_serial: by tails and ids on schema 3).

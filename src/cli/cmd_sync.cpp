@@ -48,7 +48,7 @@ const bool registered_sync = register_command(Command{
             ->required()
             ->check(fleet_uri());
         sub.add_option("--batch", o->batch, "Whole sessions per PostgreSQL transaction")->capture_default_str()->check(CLI::Range(1, 1000000));
-        sub.add_flag("--verbose", o->verbose, "One line per committed batch");
+        sub.add_flag("--verbose", o->verbose, "One line per committed batch, and one per batch read ahead while the server inserts the one before");
         return [o] {
             db::Database station(o->db);
             db::SyncOptions so;

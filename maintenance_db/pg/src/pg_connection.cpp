@@ -5,7 +5,11 @@
 
 #include <libpq-fe.h>
 
+#include <bit>
+#include <charconv>
+#include <cstring>
 #include <iterator>
+#include <limits>
 #include <memory>
 
 namespace emadiag::db {
@@ -102,9 +106,129 @@ std::vector<PgConnection::Row> PgConnection::query(const std::string& sql, const
     return rows;
 }
 
+int PgConnection::RowView::row_count() const { return PQntuples(result_); }
 bool PgConnection::RowView::is_null(int column) const { return PQgetisnull(result_, row_, column) != 0; }
 std::string_view PgConnection::RowView::text(int column) const {
     return {PQgetvalue(result_, row_, column), static_cast<std::size_t>(PQgetlength(result_, row_, column))};
+}
+
+namespace {
+// Type OIDs (pg_type.dat): the numbers a binary result may hold here.
+constexpr Oid kBoolOid = 16, kInt8Oid = 20, kInt2Oid = 21, kInt4Oid = 23, kFloat4Oid = 700, kFloat8Oid = 701;
+
+/// A big-endian unsigned integer of `n` bytes (PostgreSQL's binary send format).
+std::uint64_t big_endian(const char* p, std::size_t n) {
+    std::uint64_t v = 0;
+    for (std::size_t i = 0; i < n; ++i) v = (v << 8) | static_cast<unsigned char>(p[i]);
+    return v;
+}
+
+[[noreturn]] void not_a(const char* what, const pg_result* res, int column, std::string_view value) {
+    throw DbError("fleet server: column " + std::string(PQfname(res, column)) + " (type " + std::to_string(PQftype(res, column)) + ", " +
+                  (PQfformat(res, column) == 1 ? "binary" : "text") + ", " + std::to_string(value.size()) + " bytes) is not " + what);
+}
+}  // namespace
+
+std::int64_t PgConnection::RowView::integer(int column) const {
+    const std::string_view v = text(column);
+    if (PQfformat(result_, column) == 1) {
+        const Oid type = PQftype(result_, column);
+        const std::size_t bytes = type == kInt8Oid ? 8 : type == kInt4Oid ? 4 : type == kInt2Oid ? 2 : 0;
+        if (bytes == 0 || v.size() != bytes) not_a("an integer", result_, column, v);
+        const std::uint64_t u = big_endian(v.data(), bytes);
+        if (bytes == 8) return static_cast<std::int64_t>(u);
+        if (bytes == 4) return static_cast<std::int32_t>(static_cast<std::uint32_t>(u));
+        return static_cast<std::int16_t>(static_cast<std::uint16_t>(u));
+    }
+    std::int64_t out = 0;
+    const auto r = std::from_chars(v.data(), v.data() + v.size(), out);
+    if (r.ec != std::errc() || r.ptr != v.data() + v.size()) throw DbError("fleet server: '" + std::string(v) + "' is not an integer");
+    return out;
+}
+
+double PgConnection::RowView::real(int column) const {
+    const std::string_view v = text(column);
+    if (PQfformat(result_, column) == 1) {
+        const Oid type = PQftype(result_, column);
+        if (type == kFloat8Oid && v.size() == 8) return std::bit_cast<double>(big_endian(v.data(), 8));
+        if (type == kFloat4Oid && v.size() == 4) return std::bit_cast<float>(static_cast<std::uint32_t>(big_endian(v.data(), 4)));
+        not_a("a float8", result_, column, v);
+    }
+    double out = 0;
+    const auto r = std::from_chars(v.data(), v.data() + v.size(), out);
+    if (r.ec == std::errc() && r.ptr == v.data() + v.size()) return out;
+    if (v == "NaN") return std::numeric_limits<double>::quiet_NaN();
+    if (v == "Infinity") return std::numeric_limits<double>::infinity();
+    if (v == "-Infinity") return -std::numeric_limits<double>::infinity();
+    throw DbError("fleet server: '" + std::string(v) + "' is not a number");
+}
+
+bool PgConnection::RowView::boolean(int column) const {
+    const std::string_view v = text(column);
+    if (PQfformat(result_, column) == 1) {
+        if (PQftype(result_, column) != kBoolOid || v.size() != 1) not_a("a boolean", result_, column, v);
+        return v[0] != 0;
+    }
+    return v == "t";
+}
+
+void PgConnection::each_row(const std::vector<Query>& queries) {
+    if (PQenterPipelineMode(conn_) != 1) fail(conn_, nullptr, "pipeline mode");
+    std::string error;
+    const auto leave = [&] {
+        // Every result up to the sync point, then out of pipeline mode: the connection is as before.
+        for (int nulls = 0; nulls < 2;) {
+            PGresult* r = PQgetResult(conn_);
+            if (r == nullptr) {  // between two queries' results; twice in a row: nothing is left
+                ++nulls;
+                continue;
+            }
+            nulls = 0;
+            const auto status = PQresultStatus(r);
+            PQclear(r);
+            if (status == PGRES_PIPELINE_SYNC) break;
+            if (status == PGRES_FATAL_ERROR && PQstatus(conn_) == CONNECTION_BAD) break;
+        }
+        PQexitPipelineMode(conn_);
+    };
+    std::size_t sent = 0;
+    for (const auto& q : queries) {
+        std::vector<const char*> values;
+        values.reserve(q.params.size());
+        for (const auto& p : q.params) values.push_back(p ? p->c_str() : nullptr);
+        if (PQsendQueryParams(conn_, q.sql.c_str(), static_cast<int>(values.size()), nullptr, values.data(), nullptr, nullptr,
+                              q.binary ? 1 : 0) != 1) {
+            error = error_of(conn_, nullptr, short_sql(q.sql));
+            break;
+        }
+        ++sent;
+    }
+    if (PQpipelineSync(conn_) != 1 && error.empty()) error = error_of(conn_, nullptr, "pipeline sync");
+    for (std::size_t i = 0; i < sent; ++i) {
+        // One query's result, then the null that ends it.
+        Result res(PQgetResult(conn_));
+        const auto status = PQresultStatus(res.get());
+        if (status == PGRES_TUPLES_OK || status == PGRES_COMMAND_OK) {
+            if (error.empty()) {
+                const int n = PQntuples(res.get());
+                try {
+                    for (int row = 0; row < n; ++row) queries[i].on_row(RowView(res.get(), row));
+                } catch (...) {
+                    res.reset();
+                    while (PGresult* r = PQgetResult(conn_)) PQclear(r);
+                    leave();
+                    throw;
+                }
+            }
+        } else if (error.empty()) {
+            error = status == PGRES_PIPELINE_ABORTED ? "fleet server: " + short_sql(queries[i].sql) + ": not run after an earlier error"
+                                                     : error_of(conn_, res.get(), short_sql(queries[i].sql));
+        }
+        res.reset();
+        while (PGresult* r = PQgetResult(conn_)) PQclear(r);
+    }
+    leave();
+    if (!error.empty()) throw DbError(error, DbErrorKind::Other);
 }
 
 void PgConnection::each_row(const std::string& sql, const std::vector<std::optional<std::string>>& params,

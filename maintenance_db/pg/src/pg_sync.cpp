@@ -12,7 +12,10 @@
 #include <charconv>
 #include <ctime>
 #include <deque>
+#include <future>
 #include <map>
+#include <memory>
+#include <mutex>
 #include <set>
 #include <tuple>
 #include <unordered_map>
@@ -23,6 +26,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 constexpr std::size_t kRawChunkBytes = 1 << 20;  // raw log chunk: at most 1 MiB on either side
 constexpr std::int64_t kRecoverPage = 50000;
+constexpr int kReaderCacheKiB = 16 * 1024;  // the reader thread's SQLite page cache
 
 std::string d2s(double v) {
     char buf[64];
@@ -144,9 +148,61 @@ LightSession load_light(Database& db, std::int64_t id) {
     return m[id];
 }
 
+/// A batch of whole sessions as read from the station: the rows of the server's COPY statements as
+/// text, all but the fleet's ids, which the sender puts in once it has reserved them. Samples, raw
+/// logs and estimates are not in it: the sender streams them from the station file.
+struct PreparedBatch {
+    struct LocalRun {
+        std::int64_t run_id, session_id;
+        std::string line;
+        std::int64_t raw_bytes;
+    };
+    struct SessionLine {
+        std::size_t index;  ///< into ids
+        std::string rest;   ///< the columns after session_id, up to amends_session_id
+        std::optional<std::int64_t> amends;
+    };
+    struct IndexedLine {
+        std::size_t index;  ///< into ids
+        std::string rest;   ///< the columns after session_id
+    };
+    struct SessionRow {
+        std::int64_t session_id;  ///< the station's
+        std::string rest;         ///< the other columns (after session_id for artifacts, before it for installations)
+    };
+    struct TermLine {
+        std::int64_t session_id;  ///< the station's
+        int ordinal, sign;
+        std::int64_t of_session_id;  ///< the station's
+        std::string rest;            ///< the columns after of_session_id
+    };
+    std::vector<std::int64_t> ids;  ///< the station's session ids, ascending; empty: nothing left
+    std::int64_t lo = 0, hi = 0;
+    std::set<std::string> tails;
+    std::map<std::string, std::pair<std::string, std::string>> positions;
+    std::vector<SessionLine> sessions;  ///< grouped by tail
+    std::vector<LocalRun> runs;
+    std::vector<IndexedLine> findings;  ///< grouped by tail
+    std::vector<SessionRow> artifacts, installations;
+    std::vector<TermLine> terms;  ///< in the order the server's summary statement sorts them
+};
+
+/// A second connection to the station file, for the reader thread; none for a database without a
+/// file (":memory:"), which is then read on the sender's thread.
+std::unique_ptr<Database> open_reader(const Database& station) {
+    const std::string& path = station.path();
+    if (path.empty() || path == ":memory:") return nullptr;
+    auto reader = std::make_unique<Database>(path, station.busy_timeout_ms(), false);  // the caller's connection checked the file
+    // It reads each page once, in order: no need for the cache a writing connection keeps (256 MiB),
+    // which would double the sync's memory.
+    reader->exec("PRAGMA cache_size = -" + std::to_string(kReaderCacheKiB));
+    return reader;
+}
+
 class Syncer {
 public:
-    Syncer(Database& station, const std::string& uri, const SyncOptions& o) : db_(station), pg_(uri), server_(uri), o_(o) {}
+    Syncer(Database& station, const std::string& uri, const SyncOptions& o)
+        : db_(station), reader_(open_reader(station)), pg_(uri), server_(uri), o_(o) {}
 
     SyncResult run() {
         const auto t0 = Clock::now();
@@ -170,8 +226,7 @@ public:
         for (int attempt = 0;; ++attempt) {
             try {
                 recover_sessions();
-                while (push_batch()) {
-                }
+                push_sessions();
                 recover_findings();
                 push_findings();
                 break;
@@ -182,7 +237,7 @@ public:
                 }
                 if (!retryable(e) || attempt >= o_.max_retries) throw;
                 ++res_.retries;
-                if (o_.progress) o_.progress(std::string("retrying after: ") + e.what());
+                progress(std::string("retrying after: ") + e.what());
             }
         }
         res_.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
@@ -220,7 +275,6 @@ private:
                 local.reset();
                 rec.reset();
                 rec.bind(1, server_).bind(2, id).bind(3, to_i64(*r[1])).bind(4, now).run();
-                fleet_id_[id] = to_i64(*r[1]);
                 ++res_.sessions_recovered;
             }
             tx.commit();
@@ -228,7 +282,6 @@ private:
     }
 
     std::int64_t fleet_session_of(std::int64_t local) {
-        if (auto it = fleet_id_.find(local); it != fleet_id_.end()) return it->second;
         Statement& st = db_.cached("SELECT fleet_session_id FROM synced_sessions WHERE server = ? AND session_id = ?");
         st.bind(1, server_).bind(2, local);
         if (!st.step()) throw DbError("station session " + std::to_string(local) + " is not synced yet", DbErrorKind::Invalid);
@@ -240,9 +293,16 @@ private:
     std::vector<std::int64_t> reserve(const std::string& table, const std::string& col, std::size_t n) {
         std::vector<std::int64_t> ids;
         if (n == 0) return ids;
-        for (const auto& r : pg_.query("SELECT nextval(pg_get_serial_sequence('" + table + "', '" + col + "')) FROM generate_series(1, $1)",
-                                       {std::to_string(n)}))
-            ids.push_back(to_i64(*r[0]));
+        // The sequence named once, as a literal the parser turns into its OID: pg_get_serial_sequence
+        // in the statement was evaluated for every id (1.7 s of the server's 33 s for 240,000 sessions).
+        auto& nextval = nextval_sql_[table + "." + col];
+        if (nextval.empty()) {
+            const auto seq = pg_.query("SELECT quote_literal(pg_get_serial_sequence($1, $2))", {table, col});
+            if (seq.empty() || !seq[0][0])
+                throw DbError("fleet server " + server_ + ": " + table + "." + col + " has no sequence", DbErrorKind::Invalid);
+            nextval = "SELECT nextval(" + *seq[0][0] + "::regclass) FROM generate_series(1, $1)";
+        }
+        for (const auto& r : pg_.query(nextval, {std::to_string(n)})) ids.push_back(to_i64(*r[0]));
         std::sort(ids.begin(), ids.end());
         return ids;
     }
@@ -277,23 +337,26 @@ private:
         }
     }
 
-    /// One batch of whole sessions in one transaction; false when nothing was left.
-    bool push_batch() {
-        const std::int64_t after = local_max("synced_sessions", "session_id");
-        std::vector<std::int64_t> ids;
+    /// Reads the batch of sessions after `after` from the station (at most batch_sessions of them;
+    /// no sessions when none is left) with everything the server's transaction needs but the fleet's
+    /// ids. Runs on the reader thread with its own connection, while the sender pushes the batch
+    /// before it; it holds station_gate_, so the sender's record of a batch waits for it.
+    PreparedBatch read_batch(Database& db, std::int64_t after) {
+        const std::lock_guard<std::mutex> gate(station_gate_);
+        PreparedBatch b;
         {
-            Statement st(db_, "SELECT session_id FROM test_sessions WHERE session_id > ? ORDER BY session_id LIMIT ?");
+            Statement st(db, "SELECT session_id FROM test_sessions WHERE session_id > ? ORDER BY session_id LIMIT ?");
             st.bind(1, after).bind(2, static_cast<std::int64_t>(o_.batch_sessions));
-            while (st.step()) ids.push_back(st.column_int(0));
+            while (st.step()) b.ids.push_back(st.column_int(0));
         }
-        if (ids.empty()) return false;
-        const std::int64_t lo = ids.front(), hi = ids.back();
+        if (b.ids.empty()) return b;
+        b.lo = b.ids.front();
+        b.hi = b.ids.back();
+        const std::int64_t lo = b.lo, hi = b.hi;
         std::map<std::int64_t, LightSession> light;
-        std::set<std::string> tails;
-        std::map<std::string, std::pair<std::string, std::string>> positions;
         std::vector<std::string> session_lines;
         {
-            Statement st(db_, std::string("SELECT ") + kLocalSessionColumns + " WHERE s.session_id BETWEEN ? AND ? ORDER BY s.session_id");
+            Statement st(db, std::string("SELECT ") + kLocalSessionColumns + " WHERE s.session_id BETWEEN ? AND ? ORDER BY s.session_id");
             st.bind(1, lo).bind(2, hi);
             while (st.step()) {
                 LightSession& l = light[st.column_int(0)];
@@ -305,47 +368,157 @@ private:
                 l.position = col_opt_text(st, 9);
                 l.cycles = col_opt_i(st, 12);
                 l.amends = col_opt_i(st, 20);
-                tails.insert(l.tail);
-                if (l.position) positions[*l.position] = {st.column_text(10), st.column_text(11)};
-                // Columns after the identity and the fleet's own session_id (filled in below).
-                session_lines.push_back(f(l.tail) + '\t' + f(col_opt_text(st, 9)) + '\t' + f(l.serial) + '\t' + f(st.column_text(3)) + '\t' +
-                                        f(l.started_utc) + '\t' + opt_i(l.cycles) + '\t' + opt_d(col_opt_d(st, 13)) + '\t' +
+                b.tails.insert(l.tail);
+                if (l.position) b.positions[*l.position] = {st.column_text(10), st.column_text(11)};
+                // The columns after the fleet's own session_id (which the sender puts first), up to the
+                // amended session's fleet id (which the sender appends).
+                session_lines.push_back('\t' + session_uuid(res_.station_uuid, l.id) + '\t' + res_.station_uuid + '\t' + std::to_string(l.id) +
+                                        '\t' + f(l.tail) + '\t' + f(col_opt_text(st, 9)) + '\t' + f(l.serial) + '\t' + f(st.column_text(3)) +
+                                        '\t' + f(l.started_utc) + '\t' + opt_i(l.cycles) + '\t' + opt_d(col_opt_d(st, 13)) + '\t' +
                                         f(st.column_text(14)) + '\t' + f(st.column_text(15)) + '\t' + f(st.column_text(16)) + '\t' +
                                         f(st.column_text(17)) + '\t' + f(st.column_text(18)) + '\t' + f(st.column_text(5)) + '\t' +
                                         f(l.verdict) + '\t' + f(st.column_text(7)) + '\t' + f(st.column_text(8)) + '\t' +
                                         f(st.column_text(19)) + '\t' + f(st.column_text(21)) + '\t' + f(col_opt_text(st, 22)) + '\t' +
-                                        f(col_opt_text(st, 23)));
+                                        f(col_opt_text(st, 23)) + '\t');
             }
         }
-        load_findings(db_, tails, lo, hi, light);
-        struct LocalRun {
-            std::int64_t run_id, session_id;
-            std::string line;
-            std::int64_t raw_bytes;
-        };
-        std::vector<LocalRun> runs;
+        if (light.size() != b.ids.size())
+            throw DbError("station " + db.path() + ": sessions " + std::to_string(lo) + ".." + std::to_string(hi) + " changed while read",
+                          DbErrorKind::Invalid);
+        load_findings(db, b.tails, lo, hi, light);
         {
-            Statement st(db_, "SELECT r.run_id, r.session_id, r.tail_number, r.actuator_serial, r.started_utc, r.source, r.load_case, r.sequence, "
-                              "r.k_t_nm_per_a, r.j_kgm2, r.tau, r.sample_period_s, r.valid, r.status_note, r.meta_json, "
-                              "coalesce(g.format, ''), coalesce(length(g.content), 0) FROM runs r LEFT JOIN raw_logs g ON g.run_id = r.run_id "
-                              "WHERE r.session_id BETWEEN ? AND ? ORDER BY r.run_id");
+            Statement st(db, "SELECT r.run_id, r.session_id, r.tail_number, r.actuator_serial, r.started_utc, r.source, r.load_case, r.sequence, "
+                             "r.k_t_nm_per_a, r.j_kgm2, r.tau, r.sample_period_s, r.valid, r.status_note, r.meta_json, "
+                             "coalesce(g.format, ''), coalesce(length(g.content), 0) FROM runs r LEFT JOIN raw_logs g ON g.run_id = r.run_id "
+                             "WHERE r.session_id BETWEEN ? AND ? ORDER BY r.run_id");
             st.bind(1, lo).bind(2, hi);
             while (st.step()) {
-                runs.push_back({st.column_int(0), st.column_int(1),
-                                f(st.column_text(2)) + '\t' + f(st.column_text(3)) + '\t' + f(st.column_text(4)) + '\t' + f(st.column_text(5)) +
-                                    '\t' + f(st.column_text(6)) + '\t' + f(st.column_text(7)) + '\t' + d2s(st.column_double(8)) + '\t' +
-                                    d2s(st.column_double(9)) + '\t' + d2s(st.column_double(10)) + '\t' + d2s(st.column_double(11)) + '\t' +
-                                    (st.column_int(12) != 0 ? "t" : "f") + '\t' + f(st.column_text(13)) + '\t' + f(st.column_text(14)) +
-                                    '\t' + f(st.column_text(15)) + '\t' + std::to_string(st.column_int(16)),
-                                st.column_int(16)});
+                b.runs.push_back({st.column_int(0), st.column_int(1),
+                                  f(st.column_text(2)) + '\t' + f(st.column_text(3)) + '\t' + f(st.column_text(4)) + '\t' + f(st.column_text(5)) +
+                                      '\t' + f(st.column_text(6)) + '\t' + f(st.column_text(7)) + '\t' + d2s(st.column_double(8)) + '\t' +
+                                      d2s(st.column_double(9)) + '\t' + d2s(st.column_double(10)) + '\t' + d2s(st.column_double(11)) + '\t' +
+                                      (st.column_int(12) != 0 ? "t" : "f") + '\t' + f(st.column_text(13)) + '\t' + f(st.column_text(14)) +
+                                      '\t' + f(st.column_text(15)) + '\t' + std::to_string(st.column_int(16)),
+                                  st.column_int(16)});
             }
         }
+        // Sessions and findings go in grouped by tail (in the batch's order within a tail): a tail's rows then
+        // share heap pages, which is what a report for one tail reads.
+        std::vector<std::size_t> by_tail(b.ids.size());
+        for (std::size_t i = 0; i < b.ids.size(); ++i) by_tail[i] = i;
+        std::stable_sort(by_tail.begin(), by_tail.end(), [&](std::size_t x, std::size_t y) { return light.at(b.ids[x]).tail < light.at(b.ids[y]).tail; });
+        // Schema 3 keeps each finding's tail beside it (the report reads a tail's findings as one index range).
+        const bool finding_tails = server_version_ >= 3;
+        for (const std::size_t i : by_tail) {
+            const LightSession& l = light.at(b.ids[i]);
+            b.sessions.push_back({i, std::move(session_lines[i]), l.amends});
+            for (const auto& x : l.findings)
+                b.findings.push_back({i, '\t' + f(x.parameter) + '\t' + f(x.estimator) + '\t' + opt_d(x.value) + '\t' + opt_d(x.std_error) + '\t' +
+                                             opt_d(x.limit_value) + '\t' + f(x.limit_kind) + '\t' + f(x.status) + '\t' + f(x.note) +
+                                             (finding_tails ? '\t' + f(l.tail) : std::string()) + '\n'});
+        }
+        session_lines = {};
+        {
+            Statement st(db, "SELECT session_id, role, name, sha256 FROM session_artifacts WHERE session_id BETWEEN ? AND ?");
+            st.bind(1, lo).bind(2, hi);
+            while (st.step())
+                b.artifacts.push_back({st.column_int(0), '\t' + f(st.column_text(1)) + '\t' + f(st.column_text(2)) + '\t' + f(st.column_text(3)) + '\n'});
+        }
+        {
+            Statement st(db, "SELECT tail_number, position, from_serial, to_serial, detected_utc, cycles, hours_h, session_id FROM installations "
+                             "WHERE session_id BETWEEN ? AND ? ORDER BY installation_id");
+            st.bind(1, lo).bind(2, hi);
+            while (st.step())
+                b.installations.push_back({st.column_int(7), f(st.column_text(0)) + '\t' + f(st.column_text(1)) + '\t' + f(st.column_text(2)) + '\t' +
+                                                                 f(st.column_text(3)) + '\t' + f(st.column_text(4)) + '\t' + opt_i(col_opt_i(st, 5)) +
+                                                                 '\t' + opt_d(col_opt_d(st, 6)) + '\t'});
+        }
+        // The summary terms, in the order the station applied them (add_to_summaries): per session, the
+        // amended session's measurements out (-1), then the session's own in (+1). Sent sorted by series
+        // (byte order, as COLLATE "C"), then by that order: the server's summary statement sorts them so,
+        // and finds them already sorted (pg_schema/003). The fleet's session ids are assigned in the
+        // order of the local ones, so the local ids sort the terms as the fleet's will.
+        struct Term {
+            const std::string *tail, *position, *serial;
+            std::string parameter;  // session_measurements' values do not outlive emit
+            PreparedBatch::TermLine line;
+        };
+        std::vector<Term> terms;
+        std::deque<LightSession> amended;  // sessions of earlier batches that this one amends (a deque: stable addresses)
+        static const std::string kNoPosition;
+        for (const auto id : b.ids) {
+            const LightSession& l = light.at(id);
+            int ordinal = 0;
+            const auto emit = [&](const LightSession& s, int sign) {
+                const double days = utc_days(s.started_utc);
+                for (const auto& m : session_measurements(s.findings)) {
+                    const double w = sign / (m.std_error * m.std_error);
+                    std::string rest = '\t' + f(s.tail) + '\t' + f(s.position.value_or("")) + '\t' + f(s.serial) + '\t' + f(m.parameter) + '\t' +
+                                       d2s(days) + '\t' + d2s(w) + '\t' + d2s(w * m.value) + '\t' + d2s(w * m.value * m.value) + '\t' +
+                                       (s.cycles ? d2s(static_cast<double>(*s.cycles)) : std::string("\\N")) + '\t' + d2s(m.value) + '\t' +
+                                       d2s(m.std_error) + '\t' + f(m.limit_kind) + '\t' + opt_d(m.limit_value) + '\n';
+                    terms.push_back({&s.tail, s.position ? &*s.position : &kNoPosition, &s.serial, m.parameter,
+                                     {id, ordinal++, sign, s.id, std::move(rest)}});
+                }
+            };
+            if (l.amends) {
+                const auto it = light.find(*l.amends);
+                if (it != light.end()) {
+                    emit(it->second, -1);
+                } else {
+                    amended.push_back(load_light(db, *l.amends));
+                    emit(amended.back(), -1);
+                }
+            }
+            emit(l, +1);
+        }
+        std::sort(terms.begin(), terms.end(), [](const Term& x, const Term& y) {
+            return std::tie(*x.tail, *x.position, *x.serial, x.parameter, x.line.session_id, x.line.ordinal) <
+                   std::tie(*y.tail, *y.position, *y.serial, y.parameter, y.line.session_id, y.line.ordinal);
+        });
+        b.terms.reserve(terms.size());
+        for (auto& t : terms) b.terms.push_back(std::move(t.line));
+        progress("sessions " + std::to_string(lo) + ".." + std::to_string(hi) + " read ahead from the station");
+        return b;
+    }
 
+    /// A line to the caller's progress callback, from either thread (one at a time).
+    void progress(const std::string& line) {
+        if (!o_.progress) return;
+        const std::lock_guard<std::mutex> lock(progress_mutex_);
+        o_.progress(line);
+    }
+
+    /// The batch after `after`, read on the reader thread (or, for a station without a file of its
+    /// own, on this one when asked for).
+    std::future<PreparedBatch> read_ahead(std::int64_t after) {
+        if (reader_) return std::async(std::launch::async, [this, after] { return read_batch(*reader_, after); });
+        return std::async(std::launch::deferred, [this, after] { return read_batch(db_, after); });
+    }
+
+    /// Pushes every session after the station's record, a batch per transaction: while the server
+    /// inserts one batch, the reader thread reads the next from the station file (the two used to
+    /// take turns: the server waited while the station was read, the station while the server wrote).
+    void push_sessions() {
+        std::future<PreparedBatch> next = read_ahead(local_max("synced_sessions", "session_id"));
+        for (;;) {
+            PreparedBatch b = next.get();
+            if (b.ids.empty()) return;
+            next = read_ahead(b.hi);
+            push_batch(b);
+        }
+    }
+
+    /// One batch of whole sessions in one transaction, then its record on the station.
+    void push_batch(const PreparedBatch& b) {
+        const auto& ids = b.ids;
+        const std::int64_t lo = b.lo, hi = b.hi;
+        const auto& runs = b.runs;
         std::vector<std::int64_t> sids;
         std::int64_t samples = 0, raw_bytes = 0;
         try {
             pg_.exec("BEGIN");
-            register_places(tails, positions);
+            register_places(b.tails, b.positions);
             sids = reserve("test_sessions", "session_id", ids.size());
             const auto rids = reserve("runs", "run_id", runs.size());
             std::unordered_map<std::int64_t, std::int64_t> batch_ids, run_ids;
@@ -355,21 +528,18 @@ private:
                 const auto it = batch_ids.find(local);
                 return it != batch_ids.end() ? it->second : fleet_session_of(local);
             };
-            // Sessions and findings go in grouped by tail (in the batch's order within a tail): a tail's rows then
-            // share heap pages, which is what a report for one tail reads.
-            std::vector<std::size_t> by_tail(ids.size());
-            for (std::size_t i = 0; i < ids.size(); ++i) by_tail[i] = i;
-            std::stable_sort(by_tail.begin(), by_tail.end(), [&](std::size_t a, std::size_t b) { return light.at(ids[a]).tail < light.at(ids[b]).tail; });
             pg_.copy_in("test_sessions (session_id, session_uuid, station_uuid, station_session_id, tail_number, position, actuator_serial, "
                         "phase, started_utc, cycles, hours_h, operator_id, technician_name, technician_certificate, work_performed, source, "
                         "tool_version, verdict, verdict_note, limits_json, limits_sha256, correction_reason, prev_sha256, content_sha256, "
                         "amends_session_id)",
                         [&](const auto& put) {
-                            for (const std::size_t i : by_tail) {
-                                const LightSession& l = light.at(ids[i]);
-                                put(std::to_string(sids[i]) + '\t' + session_uuid(res_.station_uuid, ids[i]) + '\t' + res_.station_uuid + '\t' +
-                                    std::to_string(ids[i]) + '\t' + session_lines[i] + '\t' + (l.amends ? std::to_string(fleet(*l.amends)) : "\\N") +
-                                    '\n');
+                            std::string line;
+                            for (const auto& s : b.sessions) {
+                                line = std::to_string(sids[s.index]);
+                                line += s.rest;
+                                line += s.amends ? std::to_string(fleet(*s.amends)) : "\\N";
+                                line += '\n';
+                                put(line);
                             }
                         });
             if (!runs.empty()) {
@@ -435,85 +605,37 @@ private:
                     }
                 });
             }
-            // Schema 3 keeps each finding's tail beside it (the report reads a tail's findings as one index range).
-            const bool finding_tails = server_version_ >= 3;
             pg_.copy_in(std::string("findings (session_id, parameter, estimator, value, std_error, limit_value, limit_kind, status, note") +
-                            (finding_tails ? ", tail_number)" : ")"),
+                            (server_version_ >= 3 ? ", tail_number)" : ")"),
                         [&](const auto& put) {
-                            for (const std::size_t i : by_tail) {
-                                const LightSession& l = light.at(ids[i]);
-                                for (const auto& x : l.findings)
-                                    put(std::to_string(batch_ids.at(ids[i])) + '\t' + f(x.parameter) + '\t' + f(x.estimator) + '\t' +
-                                        opt_d(x.value) + '\t' + opt_d(x.std_error) + '\t' + opt_d(x.limit_value) + '\t' + f(x.limit_kind) + '\t' +
-                                        f(x.status) + '\t' + f(x.note) + (finding_tails ? '\t' + f(l.tail) : std::string()) + '\n');
+                            std::string line;
+                            for (const auto& x : b.findings) {
+                                line = std::to_string(sids[x.index]);
+                                line += x.rest;
+                                put(line);
                             }
                         });
             pg_.copy_in("session_artifacts (session_id, role, name, sha256)", [&](const auto& put) {
-                Statement st(db_, "SELECT session_id, role, name, sha256 FROM session_artifacts WHERE session_id BETWEEN ? AND ?");
-                st.bind(1, lo).bind(2, hi);
-                while (st.step())
-                    put(std::to_string(batch_ids.at(st.column_int(0))) + '\t' + f(st.column_text(1)) + '\t' + f(st.column_text(2)) + '\t' +
-                        f(st.column_text(3)) + '\n');
+                for (const auto& a : b.artifacts) put(std::to_string(batch_ids.at(a.session_id)) + a.rest);
             });
             pg_.copy_in("installations (tail_number, position, from_serial, to_serial, detected_utc, cycles, hours_h, session_id)", [&](const auto& put) {
-                Statement st(db_, "SELECT tail_number, position, from_serial, to_serial, detected_utc, cycles, hours_h, session_id FROM installations "
-                                  "WHERE session_id BETWEEN ? AND ? ORDER BY installation_id");
-                st.bind(1, lo).bind(2, hi);
-                while (st.step())
-                    put(f(st.column_text(0)) + '\t' + f(st.column_text(1)) + '\t' + f(st.column_text(2)) + '\t' + f(st.column_text(3)) + '\t' +
-                        f(st.column_text(4)) + '\t' + opt_i(col_opt_i(st, 5)) + '\t' + opt_d(col_opt_d(st, 6)) + '\t' +
-                        std::to_string(batch_ids.at(st.column_int(7))) + '\n');
-            });
-            // The summary terms, in the order the station applied them (add_to_summaries): per session, the
-            // amended session's measurements out (-1), then the session's own in (+1). Sent sorted by series
-            // (byte order, as COLLATE "C"), then by that order: the server's summary statement sorts them so,
-            // and finds them already sorted (pg_schema/003).
-            struct Term {
-                const std::string *tail, *position, *serial;
-                std::string parameter;  // session_measurements' values do not outlive emit
-                std::int64_t session_id;
-                int ordinal;
-                std::string line;
-            };
-            std::vector<Term> terms;
-            std::deque<LightSession> amended;  // sessions of earlier batches that this one amends (a deque: stable addresses)
-            static const std::string kNoPosition;
-            for (const auto id : ids) {
-                const LightSession& l = light.at(id);
-                int ordinal = 0;
-                const auto emit = [&](const LightSession& s, int sign) {
-                    const double days = utc_days(s.started_utc);
-                    for (const auto& m : session_measurements(s.findings)) {
-                        const double w = sign / (m.std_error * m.std_error);
-                        const std::int64_t sid = batch_ids.at(id);
-                        const int ord = ordinal++;
-                        std::string line = std::to_string(sid) + '\t' + std::to_string(ord) + '\t' + std::to_string(sign) + '\t' +
-                                           std::to_string(fleet(s.id)) + '\t' + f(s.tail) + '\t' + f(s.position.value_or("")) + '\t' + f(s.serial) +
-                                           '\t' + f(m.parameter) + '\t' + d2s(days) + '\t' + d2s(w) + '\t' + d2s(w * m.value) + '\t' +
-                                           d2s(w * m.value * m.value) + '\t' + (s.cycles ? d2s(static_cast<double>(*s.cycles)) : std::string("\\N")) +
-                                           '\t' + d2s(m.value) + '\t' + d2s(m.std_error) + '\t' + f(m.limit_kind) + '\t' + opt_d(m.limit_value) + '\n';
-                        terms.push_back({&s.tail, s.position ? &*s.position : &kNoPosition, &s.serial, m.parameter, sid, ord, std::move(line)});
-                    }
-                };
-                if (l.amends) {
-                    const auto it = light.find(*l.amends);
-                    if (it != light.end()) {
-                        emit(it->second, -1);
-                    } else {
-                        amended.push_back(load_light(db_, *l.amends));
-                        emit(amended.back(), -1);
-                    }
-                }
-                emit(l, +1);
-            }
-            std::sort(terms.begin(), terms.end(), [](const Term& a, const Term& b) {
-                return std::tie(*a.tail, *a.position, *a.serial, a.parameter, a.session_id, a.ordinal) <
-                       std::tie(*b.tail, *b.position, *b.serial, b.parameter, b.session_id, b.ordinal);
+                for (const auto& i : b.installations) put(i.rest + std::to_string(batch_ids.at(i.session_id)) + '\n');
             });
             pg_.copy_in("session_measurements (session_id, ordinal, sign, of_session_id, tail_number, position, actuator_serial, parameter, days, "
                         "w, wy, wyy, cycles, value, std_error, limit_kind, limit_value)",
                         [&](const auto& put) {
-                            for (const auto& t : terms) put(t.line);
+                            std::string line;
+                            for (const auto& t : b.terms) {
+                                line = std::to_string(batch_ids.at(t.session_id));
+                                line += '\t';
+                                line += std::to_string(t.ordinal);
+                                line += '\t';
+                                line += std::to_string(t.sign);
+                                line += '\t';
+                                line += std::to_string(fleet(t.of_session_id));
+                                line += t.rest;
+                                put(line);
+                            }
                         });
             pg_.exec("COMMIT");
         } catch (const DbError& e) {
@@ -521,15 +643,16 @@ private:
             if (m.rfind("[maintenance_db] ", 0) == 0) m = m.substr(17);
             throw DbError("sessions " + std::to_string(lo) + ".." + std::to_string(hi) + " of " + db_.path() + ": " + m, e.kind());
         }
-        // Only now is the batch on the server: record it on the station.
+        // Only now is the batch on the server: record it on the station (once the reader thread has
+        // read the next batch: the station file takes one writer and no readers at a time).
         {
+            const std::lock_guard<std::mutex> gate(station_gate_);
             Transaction tx(db_);
             Statement& rec = db_.cached("INSERT INTO synced_sessions(server, session_id, fleet_session_id, synced_utc) VALUES (?,?,?,?)");
             const std::string now = now_iso();
             for (std::size_t i = 0; i < ids.size(); ++i) {
                 rec.reset();
                 rec.bind(1, server_).bind(2, ids[i]).bind(3, sids[i]).bind(4, now).run();
-                fleet_id_[ids[i]] = sids[i];
             }
             tx.commit();
         }
@@ -538,10 +661,8 @@ private:
         res_.samples += samples;
         res_.raw_log_bytes += raw_bytes;
         ++res_.batches;
-        if (o_.progress)
-            o_.progress("sessions " + std::to_string(lo) + ".." + std::to_string(hi) + " -> fleet sessions " + std::to_string(sids.front()) +
-                        ".." + std::to_string(sids.back()) + " committed");
-        return true;
+        progress("sessions " + std::to_string(lo) + ".." + std::to_string(hi) + " -> fleet sessions " + std::to_string(sids.front()) + ".." +
+                 std::to_string(sids.back()) + " committed");
     }
 
     void recover_findings() {
@@ -624,12 +745,15 @@ private:
     }
 
     Database& db_;
+    std::unique_ptr<Database> reader_;  ///< the reader thread's connection to the station file
+    std::mutex station_gate_;           ///< held while a batch is read from the station, and while one is recorded in it
+    std::mutex progress_mutex_;
+    std::map<std::string, std::string> nextval_sql_;  ///< per table.column: the statement that reserves its ids
     PgConnection pg_;
     std::string server_;
     SyncOptions o_;
     SyncResult res_;
     int server_version_ = 0;  ///< the fleet server's schema version (fleet_schema_version)
-    std::unordered_map<std::int64_t, std::int64_t> fleet_id_;
 };
 
 }  // namespace

@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -41,8 +42,16 @@ public:
     class RowView {
     public:
         RowView(const pg_result* result, int row) : result_(result), row_(row) {}
+        [[nodiscard]] int row() const { return row_; }
+        [[nodiscard]] int row_count() const;  ///< the rows of this result (to reserve room at row 0)
         [[nodiscard]] bool is_null(int column) const;
-        [[nodiscard]] std::string_view text(int column) const;  ///< "" for NULL
+        [[nodiscard]] std::string_view text(int column) const;  ///< "" for NULL; a text column's bytes in either result format
+        /// An integer column (int2, int4, int8) of a text or a binary result; DbError when it is not one.
+        [[nodiscard]] std::int64_t integer(int column) const;
+        /// A float8 or float4 column of a text or a binary result (the same double either way); DbError when it is not one.
+        [[nodiscard]] double real(int column) const;
+        /// A boolean column of a text or a binary result.
+        [[nodiscard]] bool boolean(int column) const;
     private:
         const pg_result* result_;
         int row_;
@@ -50,6 +59,18 @@ public:
     /// As query, but hands each row to `f` where it lies in libpq's result (a report reads thousands
     /// of rows: no vector of strings in between).
     void each_row(const std::string& sql, const std::vector<std::optional<std::string>>& params, const std::function<void(const RowView&)>& f);
+    /// One query of each_rows: with `binary`, the rows come in PostgreSQL's binary format (a double as
+    /// its 8 bytes: no text to print on the server nor to parse here; read numbers with integer and real).
+    struct Query {
+        std::string sql;
+        std::vector<std::optional<std::string>> params;
+        bool binary = false;
+        std::function<void(const RowView&)> on_row;
+    };
+    /// Several queries sent at once (libpq's pipeline mode: one round trip), their rows handed over in
+    /// order: the server runs the next query while the rows of one are read here. The first error
+    /// is thrown after every result has been read (the queries after it are not run).
+    void each_row(const std::vector<Query>& queries);
     void exec(const std::string& sql);
     /// COPY table (columns) FROM STDIN: rows given as text-format lines through `fill`, which calls
     /// `put` as often as it likes (sent on in pieces of about 1 MiB, so memory stays bounded).
@@ -76,7 +97,9 @@ void add_station_role(PgConnection& pg, const std::string& role);
 struct SyncOptions {
     std::size_t batch_sessions = 20000;  ///< whole sessions per PostgreSQL transaction (docs/fleet-server.md: why so many)
     int max_retries = 20;               ///< on deadlock or a concurrent sync of the same file
-    std::function<void(const std::string&)> progress;  ///< one line per committed batch (may be empty)
+    /// One line per committed batch, and one per batch read ahead from the station while the server
+    /// inserts the one before (may be empty; called from the sync's two threads, never at once).
+    std::function<void(const std::string&)> progress;
 };
 struct SyncResult {
     std::string station_uuid;
@@ -89,7 +112,9 @@ struct SyncResult {
 /// sessions is one PostgreSQL transaction; what the server committed is recorded in the station's
 /// tables synced_sessions / synced_discovery_findings (schema/005_sync.sql). A sync killed at any
 /// point leaves no partial session on the server, and the next sync records what was committed and
-/// pushes the rest.
+/// pushes the rest. While the server inserts one batch, a second thread reads the next from the
+/// station file on its own connection (one batch ahead at most; none for a ":memory:" station,
+/// which is read in turn).
 SyncResult sync_to_fleet(Database& station, const std::string& uri, const SyncOptions& options = {});
 
 /// The reports' view of a fleet server.
@@ -115,6 +140,8 @@ private:
     std::vector<StoredTestSession> sessions_where(const std::string& where, const std::string& value, const SessionListParts& parts, bool by_tail);
     PgConnection pg_;
     int schema_version_ = 0;
+    /// The positions' ATA reference and description (position -> both), read once in the snapshot.
+    std::optional<std::map<std::string, std::pair<std::string, std::string>>> places_;
 };
 
 /// A RecordSource for --db: a fleet server for a postgresql:// URI, else the SQLite file (opened and
