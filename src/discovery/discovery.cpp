@@ -426,6 +426,22 @@ TrajectoryLinearisation linearise_trajectory(const Run& run, const RunSignals& s
     return lin;
 }
 
+/// linearise_trajectory with one probe per scanned shape of an effect: `set` puts the effect at the
+/// probe amplitude `probe` (its unit) and the shape into a copy of `p`.
+template <class SetProbe>
+TrajectoryLinearisation linearise_over_shapes(const Run& run, const RunSignals& s, const NoiseFloor& floor, double fsj_base_nm,
+                                              const std::vector<std::string>& model_names, const sim::EmaParams& p,
+                                              const RunSignals& model_sim, const std::vector<EffectShape>& grid, double probe,
+                                              SetProbe set) {
+    std::vector<sim::EmaParams> probes;
+    for (const auto& shape : grid) {
+        sim::EmaParams q = p;
+        set(q, shape);
+        probes.push_back(q);
+    }
+    return linearise_trajectory(run, s, floor, fsj_base_nm, model_names, p, model_sim, probes, std::vector<double>(probes.size(), probe));
+}
+
 /// Ripple by the trajectory: the amplitude (N m) of the probe re-simulated at each scanned period, and
 /// the iterations of its fit on the trajectory.
 constexpr double kRippleProbeNm = 0.01;
@@ -473,15 +489,11 @@ LowSpeedResult low_speed_stage(const Run& run, const RunSignals& s, const NoiseF
     st.ran = true;
     st.cost_before = cost_now;
     const std::vector<EffectShape> grid = shape_grid(EffectKind::Stribeck, s);
-    std::vector<sim::EmaParams> probes;
-    for (const auto& shape : grid) {
-        sim::EmaParams q = p;
-        q.effects.stribeck_amplitude_nm = kLowSpeedProbeNm;
-        q.effects.stribeck_speed_rad_s = shape.shape1;
-        probes.push_back(q);
-    }
-    const TrajectoryLinearisation lin = linearise_trajectory(run, s, floor, fsj_base_nm, model_names, p, model_sim, probes,
-                                                             std::vector<double>(probes.size(), kLowSpeedProbeNm));
+    const TrajectoryLinearisation lin = linearise_over_shapes(run, s, floor, fsj_base_nm, model_names, p, model_sim, grid,
+                                                              kLowSpeedProbeNm, [](sim::EmaParams& q, const EffectShape& shape) {
+                                                                  q.effects.stribeck_amplitude_nm = kLowSpeedProbeNm;
+                                                                  q.effects.stribeck_speed_rad_s = shape.shape1;
+                                                              });
     st.simulations += lin.simulations;
     const auto n_rows = lin.e.size();
     st.rows = static_cast<std::size_t>(n_rows);
@@ -1484,6 +1496,17 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
         }
     }
     // Sensor stage: the angle channel, which the torque residual does not see (offset and drift).
+    // The model's own parameters: the health, the fitted values of the effects added (but `skip`) and
+    // the terms' coefficients.
+    auto own_parameter_names = [&](std::optional<EffectKind> skip = std::nullopt) {
+        std::vector<std::string> names = health_names;
+        for (const auto& a : accepted) {
+            if (skip && a.kind == *skip) continue;
+            for (const auto& n : fitted_sim_effects(a.kind)) names.push_back(n);
+        }
+        for (std::size_t i = 0; i < p.terms.size(); ++i) names.push_back(term_parameter(i));
+        return names;
+    };
     // The model's own parameters (health, the effects' values, the terms' coefficients) refitted on the
     // trajectory from `p`: the values from the trajectory, each standard error at least the torque
     // fit's (the trajectory's Jacobian understates them: the simulator's current chatter makes its cost
@@ -1493,11 +1516,7 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
         double cost = 0;
     };
     auto refit_on_trajectory = [&]() {
-        std::vector<std::string> names = health_names;
-        for (const auto& a : accepted) {
-            for (const auto& n : fitted_sim_effects(a.kind)) names.push_back(n);
-        }
-        for (std::size_t i = 0; i < p.terms.size(); ++i) names.push_back(term_parameter(i));
+        const std::vector<std::string> names = own_parameter_names();
         sim::EmaParams start = p;
         start.fsj_nm = std::max(fsj_base_nm, start.fdj_nm);
         TrajectoryRefit r;
@@ -1573,12 +1592,7 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
             p_base.effects.stribeck_amplitude_nm = 0.0;
             base_sim_ls = run_signals(resimulate(run, p_base));
         }
-        std::vector<std::string> model_names = health_names;
-        for (const auto& a : accepted) {
-            if (a.kind == EffectKind::Stribeck) continue;
-            for (const auto& n : fitted_sim_effects(a.kind)) model_names.push_back(n);
-        }
-        for (std::size_t i = 0; i < p.terms.size(); ++i) model_names.push_back(term_parameter(i));
+        const std::vector<std::string> model_names = own_parameter_names(EffectKind::Stribeck);
         LowSpeedResult ls = low_speed_stage(run, s, floor, mask, fsj_base_nm, model_names, p_base, base_sim_ls,
                                             trajectory_error(s, base_sim_ls, floor).cost);
         rep.low_speed = ls.stage;
@@ -1623,21 +1637,13 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
     if (!periodic_in &&
         std::none_of(accepted.begin(), accepted.end(), [](const EffectShape& a) { return a.kind == EffectKind::Ripple; }) &&
         std::find(excluded.begin(), excluded.end(), EffectKind::Ripple) == excluded.end() && traj_now.cost > 1.0) {
-        std::vector<std::string> model_names = health_names;
-        for (const auto& a : accepted) {
-            for (const auto& n : fitted_sim_effects(a.kind)) model_names.push_back(n);
-        }
-        for (std::size_t i = 0; i < p.terms.size(); ++i) model_names.push_back(term_parameter(i));
+        const std::vector<std::string> model_names = own_parameter_names();
         const std::vector<EffectShape> grid = shape_grid(EffectKind::Ripple, s);
-        std::vector<sim::EmaParams> probes;
-        for (const auto& shape : grid) {
-            sim::EmaParams q = p;
-            q.effects.ripple_amplitude_nm = kRippleProbeNm;
-            q.effects.ripple_periods_per_rev = shape.shape1;
-            probes.push_back(q);
-        }
-        const TrajectoryLinearisation lin = linearise_trajectory(run, s, floor, fsj_base_nm, model_names, p, model_sim, probes,
-                                                                 std::vector<double>(probes.size(), kRippleProbeNm));
+        const TrajectoryLinearisation lin = linearise_over_shapes(run, s, floor, fsj_base_nm, model_names, p, model_sim, grid,
+                                                                  kRippleProbeNm, [](sim::EmaParams& q, const EffectShape& shape) {
+                                                                      q.effects.ripple_amplitude_nm = kRippleProbeNm;
+                                                                      q.effects.ripple_periods_per_rev = shape.shape1;
+                                                                  });
         const double dn = static_cast<double>(lin.e.size());
         const double ln_g = std::log(static_cast<double>(std::max<std::size_t>(1, grid.size())));
         const double z = (lin.rss0 - dn) / std::sqrt(2.0 * dn);
