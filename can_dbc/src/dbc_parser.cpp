@@ -6,8 +6,9 @@
 
 #include <algorithm>
 #include <cctype>
-#include <charconv>
 #include <cerrno>
+#include <charconv>
+#include <cmath>
 #include <cstdlib>
 #include <set>
 
@@ -253,6 +254,16 @@ private:
         next();
         return v;
     }
+    /// A value-description key (VAL_, VAL_TABLE_): a whole number that fits a signed 64-bit raw value.
+    std::int64_t value_key(const char* what) {
+        const Token t = peek();
+        const double v = number(what);
+        // 2^63 is exact in a double; every whole double in [-2^63, 2^63) converts.
+        constexpr double kTwo63 = 9223372036854775808.0;
+        if (!(v == std::trunc(v) && v >= -kTwo63 && v < kTwo63))
+            throw SyntaxError{t.line, t.col, std::string("invalid ") + what + " '" + t.text + "': not a whole number of a signed 64-bit raw value"};
+        return static_cast<std::int64_t>(v);
+    }
     std::uint64_t unsigned_int(const char* what) {
         const Token& t = peek();
         if (t.kind != Tok::Number || t.text[0] == '-' || t.text[0] == '+') fail(t, std::string("unsigned integer ") + what);
@@ -308,7 +319,7 @@ private:
             const std::string name = ident("value table name");
             auto& table = db_.value_tables[name];
             while (peek().kind == Tok::Number) {
-                const auto v = static_cast<std::int64_t>(number("value"));
+                const std::int64_t v = value_key("value");
                 table[v] = string_lit("value description");
             }
             expect_semicolon();
@@ -656,10 +667,10 @@ private:
         std::map<std::int64_t, std::string> table;
         while (peek().kind == Tok::Number) {
             const Token vt = peek();
-            const double v = number("value");
+            const std::int64_t v = value_key("value");
             const std::string d = string_lit("value description");
-            if (table.count(static_cast<std::int64_t>(v))) error(vt, "signal '" + sname + "': value " + vt.text + " described twice");
-            table[static_cast<std::int64_t>(v)] = d;
+            if (table.count(v)) error(vt, "signal '" + sname + "': value " + vt.text + " described twice");
+            table[v] = d;
         }
         expect_semicolon();
         if (s) s->value_table = std::move(table);

@@ -129,6 +129,21 @@ TEST(DbcFindings, OutOfRangeMultiplexerNumbersAreCleanErrors) {
                 ThrowsMessage<can::CanError>(HasSubstr("invalid multiplexor range end")));
 }
 
+TEST(DbcFindings, ValueDescriptionKeysMustBeWholeSigned64BitNumbers) {
+    // Found by fuzz_dbc (session 8): VAL_ 1 A 4.44e25 "x" converted 4.44e25 to int64 (undefined
+    // behaviour, UBSan); a key must be a whole number of a signed 64-bit raw value.
+    const std::string head = "BU_: ECU\nBO_ 1 M: 8 ECU\n SG_ A : 0|8@1+ (1,0) [0|255] \"\" ECU\n";
+    EXPECT_THAT([&] { (void)can::parse_dbc(head + "VAL_ 1 A 44444444444444444444444444 \"x\" ;\n", "v.dbc"); },
+                ThrowsMessage<can::CanError>(HasSubstr("not a whole number of a signed 64-bit raw value")));
+    EXPECT_THAT([&] { (void)can::parse_dbc(head + "VAL_ 1 A 1.5 \"x\" ;\n", "v.dbc"); },
+                ThrowsMessage<can::CanError>(HasSubstr("invalid value '1.5'")));
+    EXPECT_THAT([&] { (void)can::parse_dbc("VAL_TABLE_ T 1e300 \"x\" ;\n" + head, "t.dbc"); },
+                ThrowsMessage<can::CanError>(HasSubstr("not a whole number")));
+    const can::Database ok = can::parse_dbc(head + "VAL_ 1 A -9223372036854775808 \"min\" 0 \"off\" 1 \"on\" ;\n", "ok.dbc");
+    ASSERT_EQ(ok.messages.size(), 1u);
+    EXPECT_EQ(ok.messages.front().signals.front().value_table.size(), 3u);
+}
+
 std::string temp_file(const std::string& name, const std::string& text) {
     const fs::path p = fs::temp_directory_path() / ("emadiag-limits-" + std::to_string(::getpid()) + "-" + name);
     std::ofstream(p, std::ios::binary) << text;
