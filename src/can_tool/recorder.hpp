@@ -28,8 +28,11 @@ struct RecorderOptions {
     std::chrono::milliseconds sequence_timeout{60000};     ///< whole sequence, simulation included
     std::chrono::milliseconds trailing_grace{50};          ///< keep listening after DONE
     /// Listen this long before the first command: a TOOL_Command or TOOL_Heartbeat heard then means
-    /// another tool is on the bus, and nothing is sent (three heartbeat periods).
-    std::chrono::milliseconds listen_before_command{60};
+    /// another tool is on the bus, and nothing is sent. Longer than the EMA's 100 ms heartbeat
+    /// watchdog: a tool that keeps an EMA in a sequence must send a heartbeat within every 100 ms, so
+    /// this window hears it even when that tool's sender runs late. (Three nominal periods, 60 ms,
+    /// missed a tool whose heartbeats came 54 ms apart on a loaded user-mode Linux guest in CI.)
+    std::chrono::milliseconds listen_before_command{150};
     bool send_heartbeat = true;                            ///< false only to test the EMA's watchdog
     /// A heartbeat that spans several sequences (test-run: it keeps going between them, while runs
     /// are estimated, so no other tool finds the bus free); started here if not yet running, and
