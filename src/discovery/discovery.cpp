@@ -102,6 +102,12 @@ constexpr double kHypothesisMinCostGap = 0.1;
 /// against the truth's 5.87), while the torque screening did (delta BIC 429 against 92): the twin never
 /// replaces the screening's choice and is always reported beside it as equivalent.
 constexpr double kPeriodicTwinRatio = std::numeric_limits<double>::infinity();
+/// Two trajectory costs the trajectory does not tell apart: the worse below `ratio` times the better,
+/// or within kHypothesisMinCostGap of it.
+bool not_told_apart(double cost_a, double cost_b, double ratio) {
+    const double lo = std::min(cost_a, cost_b), hi = std::max(cost_a, cost_b);
+    return hi < ratio * lo || hi - lo < kHypothesisMinCostGap;
+}
 /// eta_O this many standard errors off the datasheet value is a departure an unmodelled friction
 /// could explain (EfficiencyAlternative).
 constexpr double kEfficiencyMinZ = 5.0;
@@ -449,6 +455,16 @@ constexpr int kRippleFitIterations = 6;
 /// The torque screening's amplitude of the same ripple period, in its standard errors, that confirms
 /// the trajectory's.
 constexpr double kRippleTorqueMinZ = 1.96;
+
+/// How much the chi-square of the torque residual's window means (against their floor) rises from the
+/// model re-simulated as `before` to the one re-simulated as `after`.
+double torque_window_chi2_rise(const RunSignals& s, const std::vector<char>& mask, const NoiseFloor& floor, const RunSignals& before,
+                               const RunSignals& after) {
+    const ErrorMetrics e_old = model_error(s, before, mask), e_new = model_error(s, after, mask);
+    const double windows = static_cast<double>(e_old.torque_samples) / static_cast<double>(kMetricWindowSamples);
+    return windows * (std::pow(e_new.residual_torque_window_rms_nm, 2) - std::pow(e_old.residual_torque_window_rms_nm, 2)) /
+           std::pow(std::max(floor.torque_window_nm, 1e-300), 2);
+}
 
 /// Low-speed friction stage (docs/discovery.md "Low-speed friction by the trajectory"). The Stribeck
 /// column at each scanned speed is re-simulated at this amplitude (N m; the trajectory's response is
@@ -1257,13 +1273,8 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
             Hypothesis h0{step.name_key, step.name_text, amp_text, traj_new.cost, traj_new, fit.simulations};
             step.hypotheses.push_back(h0);
             // Factors of each hypothesis' terms (parsimony below); a library effect has none to compare.
-            auto degree = [](const std::vector<sim::Term>& terms) {
-                std::size_t d = 0;
-                for (const auto& t : terms) d = std::max(d, t.factors.size());
-                return d;
-            };
             constexpr std::size_t kNoDegree = std::numeric_limits<std::size_t>::max();
-            std::vector<std::size_t> degrees = {step.added ? kNoDegree : degree(step.added_terms)};
+            std::vector<std::size_t> degrees = {step.added ? kNoDegree : term_degree(step.added_terms)};
             struct AltFit {
                 FitResult fit;
                 RunSignals sim;
@@ -1306,7 +1317,7 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
                     change += (change.empty() ? "" : ", ") + t->text();
                 }
                 step.hypotheses.push_back({alt.key, alt.text, change, te.cost, te, af.fit.simulations, alt.tell_apart_ratio});
-                degrees.push_back(degree(alt.terms));
+                degrees.push_back(term_degree(alt.terms));
                 step.simulations += af.fit.simulations;
                 alt_fits.push_back(std::move(af));
             }
@@ -1331,8 +1342,7 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
                 for (std::size_t i = 0; i < step.hypotheses.size(); ++i) {
                     const Hypothesis& h = step.hypotheses[i];
                     if (degrees[i] >= degrees[best] || h.tell_apart_ratio > kHypothesisRatio) continue;
-                    const double lo = std::min(h.cost, step.hypotheses[b0].cost), hi = std::max(h.cost, step.hypotheses[b0].cost);
-                    if (hi < kHypothesisRatio * lo || hi - lo < kHypothesisMinCostGap) best = i;
+                    if (not_told_apart(h.cost, step.hypotheses[b0].cost, kHypothesisRatio)) best = i;
                 }
             }
             if (best != 0) {
@@ -1358,9 +1368,7 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
             step.hypotheses.insert(step.hypotheses.begin(), chosen);
             if (step.hypotheses.size() >= 2) {
                 const Hypothesis &h1 = step.hypotheses[0], &h2 = step.hypotheses[1];
-                const double lo = std::min(h1.cost, h2.cost), hi = std::max(h1.cost, h2.cost);
-                const double ratio = std::max(h1.tell_apart_ratio, h2.tell_apart_ratio);
-                step.equivalent = hi < ratio * lo || hi - lo < kHypothesisMinCostGap;
+                step.equivalent = not_told_apart(h1.cost, h2.cost, std::max(h1.tell_apart_ratio, h2.tell_apart_ratio));
             }
         }
         if (!(traj_new.cost < traj_now.cost)) {
@@ -1496,28 +1504,32 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
         }
     }
     // Sensor stage: the angle channel, which the torque residual does not see (offset and drift).
-    // The model's own parameters: the health, the fitted values of the effects added (but `skip`) and
-    // the terms' coefficients.
-    auto own_parameter_names = [&](std::optional<EffectKind> skip = std::nullopt) {
+    // Whether the torque rounds added an effect or terms.
+    auto steps_added = [&] {
+        return std::any_of(rep.steps.begin(), rep.steps.end(), [](const DiscoveryStep& st) { return st.added || !st.added_terms.empty(); });
+    };
+    // The own parameters of the model `q`: the health, the fitted values of the effects added (but
+    // `skip`) and the coefficients of q's terms.
+    auto own_parameter_names = [&](const sim::EmaParams& q, std::optional<EffectKind> skip = std::nullopt) {
         std::vector<std::string> names = health_names;
         for (const auto& a : accepted) {
             if (skip && a.kind == *skip) continue;
             for (const auto& n : fitted_sim_effects(a.kind)) names.push_back(n);
         }
-        for (std::size_t i = 0; i < p.terms.size(); ++i) names.push_back(term_parameter(i));
+        for (std::size_t i = 0; i < q.terms.size(); ++i) names.push_back(term_parameter(i));
         return names;
     };
-    // The model's own parameters (health, the effects' values, the terms' coefficients) refitted on the
-    // trajectory from `p`: the values from the trajectory, each standard error at least the torque
-    // fit's (the trajectory's Jacobian understates them: the simulator's current chatter makes its cost
-    // rough at small steps; see the low-speed stage's profile).
+    // The own parameters of the model `from` (health, the effects' values, the terms' coefficients)
+    // refitted on the trajectory: the values from the trajectory, each standard error at least the
+    // torque fit's (the trajectory's Jacobian understates them: the simulator's current chatter makes
+    // its cost rough at small steps; see the low-speed stage's profile).
     struct TrajectoryRefit {
         FitResult fit;
         double cost = 0;
     };
-    auto refit_on_trajectory = [&]() {
-        const std::vector<std::string> names = own_parameter_names();
-        sim::EmaParams start = p;
+    auto refit_on_trajectory = [&](const sim::EmaParams& from) {
+        const std::vector<std::string> names = own_parameter_names(from);
+        sim::EmaParams start = from;
         start.fsj_nm = std::max(fsj_base_nm, start.fdj_nm);
         TrajectoryRefit r;
         r.fit = fit_by_resimulation(run, s, start, names, mask, fsj_base_nm, kFitWindowSamples, nullptr, kFinalRefitIterations, &floor);
@@ -1526,7 +1538,7 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
             double before = 0;
             if (v.name == "fdj_nm") before = find_health(health, kParamFdj)->std_error;
             else if (v.name == "eta_o") before = find_health(health, kParamEtaO)->std_error;
-            else if (is_term_parameter(v.name)) before = p.terms[std::stoul(v.name.substr(5))].std_error;
+            else if (is_term_parameter(v.name)) before = from.terms[std::stoul(v.name.substr(5))].std_error;
             else {
                 for (const auto& t : rep.model.terms) {
                     if (t.effect == effect_field(v.name)) before = t.std_error;
@@ -1541,19 +1553,15 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
         const TrajectoryError traj_before = traj_now;
         const AugmentedModel model_before = rep.model;
         sensor_stage(run, s, floor, mask, p, model_sim, traj_now, rep);
-        const bool rounds_added = std::any_of(rep.steps.begin(), rep.steps.end(),
-                                              [](const DiscoveryStep& st) { return st.added || !st.added_terms.empty(); });
-        if (!rep.sensor_findings.empty() && rounds_added) {
+        if (!rep.sensor_findings.empty() && steps_added()) {
             // A sensor offset or drift against the model's own parameters refitted on the trajectory: the
             // torque rounds fit each effect on the torque windows, and what that fit leaves in the angle
             // can look like a drift (seed 127's ripple fitted 0.0465 N m, truth 0.0402: trajectory cost
             // 9.9, a "drift" took it to 2.3). The sensor terms stay only when the trajectory tells them
             // apart from the refit (kHypothesisRatio); otherwise the model needs nothing new.
             const double sensor_cost = traj_now.cost;
-            const sim::EmaParams p_sensor = p;
-            p = p_before;
             try {
-                const TrajectoryRefit r = refit_on_trajectory();
+                const TrajectoryRefit r = refit_on_trajectory(p_before);
                 if (!(kHypothesisRatio * sensor_cost < r.cost)) {
                     rep.notes.push_back("position sensor stage: " + rep.sensor_findings.front().text + " (trajectory cost " +
                                         fmt3(sensor_cost) + ") is not told apart from the model's own parameters refitted on the "
@@ -1561,11 +1569,8 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
                     rep.sensor_findings.clear();
                     rep.model = model_before;
                     adopt_trajectory_fit(r.fit);
-                } else {
-                    p = p_sensor;
                 }
             } catch (const std::exception& e) {
-                p = p_sensor;
                 rep.notes.push_back(std::string("position sensor stage: the refit on the trajectory not possible: ") + e.what());
             }
         }
@@ -1592,7 +1597,7 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
             p_base.effects.stribeck_amplitude_nm = 0.0;
             base_sim_ls = run_signals(resimulate(run, p_base));
         }
-        const std::vector<std::string> model_names = own_parameter_names(EffectKind::Stribeck);
+        const std::vector<std::string> model_names = own_parameter_names(p, EffectKind::Stribeck);
         LowSpeedResult ls = low_speed_stage(run, s, floor, mask, fsj_base_nm, model_names, p_base, base_sim_ls,
                                             trajectory_error(s, base_sim_ls, floor).cost);
         rep.low_speed = ls.stage;
@@ -1605,11 +1610,7 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
             } else if (ls.stage.added) {
                 // ... nor may it spoil the torque evidence that found the friction: the chi-square of the
                 // torque window means may rise by at most kLowSpeedMaxTorqueChi2Rise.
-                const ErrorMetrics e_old = model_error(s, model_sim, mask), e_new = model_error(s, ls.fit.signals, mask);
-                const double windows = static_cast<double>(e_old.torque_samples) / static_cast<double>(kMetricWindowSamples);
-                const double rise = windows *
-                                    (std::pow(e_new.residual_torque_window_rms_nm, 2) - std::pow(e_old.residual_torque_window_rms_nm, 2)) /
-                                    std::pow(std::max(floor.torque_window_nm, 1e-300), 2);
+                const double rise = torque_window_chi2_rise(s, mask, floor, model_sim, ls.fit.signals);
                 if (rise > kLowSpeedMaxTorqueChi2Rise) {
                     rep.low_speed.added = false;
                     rep.low_speed.verdict = "the torque rounds' fit is kept: the trajectory's estimate would raise the "
@@ -1637,7 +1638,7 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
     if (!periodic_in &&
         std::none_of(accepted.begin(), accepted.end(), [](const EffectShape& a) { return a.kind == EffectKind::Ripple; }) &&
         std::find(excluded.begin(), excluded.end(), EffectKind::Ripple) == excluded.end() && traj_now.cost > 1.0) {
-        const std::vector<std::string> model_names = own_parameter_names();
+        const std::vector<std::string> model_names = own_parameter_names(p);
         const std::vector<EffectShape> grid = shape_grid(EffectKind::Ripple, s);
         const TrajectoryLinearisation lin = linearise_over_shapes(run, s, floor, fsj_base_nm, model_names, p, model_sim, grid,
                                                                   kRippleProbeNm, [](sim::EmaParams& q, const EffectShape& shape) {
@@ -1712,18 +1713,14 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
                 // 2.15 with a 1-per-rev "ripple" where the screen's own-parameters cost was 14.6): the
                 // criterion with the amplitude and the scanned period, and the ripple must explain
                 // kLowSpeedMinExplained of the excess that refit leaves.
-                const TrajectoryRefit base = refit_on_trajectory();
+                const TrajectoryRefit base = refit_on_trajectory(p);
                 const double base_cost = base.cost;
                 const double fit_bic = dn * std::log(base_cost / cost) - 2.0 * std::log(dn) - 2.0 * ln_g;
                 // ... and must not contradict the torque residual: below a few revolutions per sample a
                 // ripple shows in T_R, so the chi-square of the torque window means may rise by at most
                 // kLowSpeedMaxTorqueChi2Rise over that refit (the same speed bump's 1-per-rev "ripple"
                 // raised it by far more).
-                const ErrorMetrics e_base = model_error(s, base.fit.signals, mask), e_new = model_error(s, fit.signals, mask);
-                const double windows = static_cast<double>(e_base.torque_samples) / static_cast<double>(kMetricWindowSamples);
-                const double rise = windows *
-                                    (std::pow(e_new.residual_torque_window_rms_nm, 2) - std::pow(e_base.residual_torque_window_rms_nm, 2)) /
-                                    std::pow(std::max(floor.torque_window_nm, 1e-300), 2);
+                const double rise = torque_window_chi2_rise(s, mask, floor, base.fit.signals, fit.signals);
                 const bool kept = fit_bic > kMinDeltaBic && amp >= kMinEffectPeakNm && cost < traj_now.cost &&
                                   cost - 1.0 < (1.0 - kLowSpeedMinExplained) * (base_cost - 1.0) && rise <= kLowSpeedMaxTorqueChi2Rise;
                 verdict = "fitted on the trajectory: " + fmt3(amp) + " N m at " + fmt3(grid[best].shape1) + " per rev, cost " +
@@ -1756,14 +1753,13 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
     // with the health off its value (a library ripple: cost 16 and FDJ 1.5 se low, where the
     // trajectory's linearised refit reaches 0.9). Run when the model leaves structure the report would
     // call unexplained; kept when it removes half the excess over the floor.
-    const bool effects_added = std::any_of(rep.steps.begin(), rep.steps.end(),
-                                           [](const DiscoveryStep& st) { return st.added || !st.added_terms.empty(); });
+    const bool effects_added = steps_added();
     rep.structure = structure_reports(s, model_sim, mask, floor);
     const bool structure_left =
         std::any_of(rep.structure.begin(), rep.structure.end(), [](const StructureReport& r) { return r.significant; });
     if (effects_added && !rep.low_speed.added && structure_left) {
         try {
-            const TrajectoryRefit r = refit_on_trajectory();
+            const TrajectoryRefit r = refit_on_trajectory(p);
             const bool kept = r.cost < traj_now.cost - 0.5 * (traj_now.cost - 1.0);
             rep.notes.push_back("final refit of the model's own parameters on the trajectory (" + std::to_string(r.fit.simulations) +
                                 " simulations): cost " + fmt3(traj_now.cost) + " -> " + fmt3(r.cost) + ", FDJ " + fmt3(p.fdj_nm) +

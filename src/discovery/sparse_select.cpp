@@ -145,11 +145,7 @@ GenericScreen screen_generated(const RunSignals& s, const ScreenInput& in, const
     // Parsimony: among the families equivalent to the best whose delta BIC is within kParsimonyBic of
     // it (no evidence between them), the one with the fewest factors leads.
     {
-        auto degree = [&](std::size_t i) {
-            std::size_t d = 0;
-            for (const auto& t : out.ranking[i].terms) d = std::max(d, t.factors.size());
-            return d;
-        };
+        auto degree = [&](std::size_t i) { return term_degree(out.ranking[i].terms); };
         std::size_t lead = 0;
         for (std::size_t i = 1; i < out.ranking.size(); ++i) {
             if (out.ranking[i].delta_bic < out.ranking.front().delta_bic - kParsimonyBic) break;
@@ -247,6 +243,12 @@ GenericScreen screen_generated(const RunSignals& s, const ScreenInput& in, const
         }
     }
     return out;
+}
+
+std::size_t term_degree(const std::vector<sim::Term>& terms) {
+    std::size_t d = 0;
+    for (const auto& t : terms) d = std::max(d, t.factors.size());
+    return d;
 }
 
 bool is_period_basis(const sim::TermFactor& f) { return f.basis == sim::TermBasis::Sin || f.basis == sim::TermBasis::Cos; }

@@ -65,6 +65,9 @@ struct GenericScreen {
 [[nodiscard]] GenericScreen screen_generated(const RunSignals& s, const ScreenInput& in,
                                              const std::vector<TermFamily>& lib, std::uint64_t seed = 1);
 
+/// Factors of a block's most complex term (the parsimony of the screening and of the hypotheses).
+[[nodiscard]] std::size_t term_degree(const std::vector<sim::Term>& terms);
+
 /// A periodic basis (sin or cos): its parameter a is the period.
 [[nodiscard]] bool is_period_basis(const sim::TermFactor& f);
 /// The period factor of a periodic block (sin/cos of an angle), or nullptr.
