@@ -161,6 +161,11 @@ GenericScreen screen_generated(const RunSignals& s, const ScreenInput& in, const
 
     GenericEvidence& top = out.ranking.front();
     const std::size_t top_fam = sorted_fam.front();
+    std::vector<signed char> equivalent_to_top_memo(lib.size(), -1);  // the resamples below ask again and again
+    auto equivalent_to_top = [&](std::size_t f) {
+        if (equivalent_to_top_memo[f] < 0) equivalent_to_top_memo[f] = equivalent(f, top_fam) ? 1 : 0;
+        return equivalent_to_top_memo[f] == 1;
+    };
     // Block-time cross-validation: contiguous folds of windows.
     {
         double cv0 = 0, cv1 = 0;
@@ -220,7 +225,7 @@ GenericScreen screen_generated(const RunSignals& s, const ScreenInput& in, const
             // allowance and no other family beats it by more than kStabilityTie, or the one that does
             // is equivalent to it (near-equivalent families, e.g. sgn(w) w^2 and sgn(w) w^2 |F_R|,
             // share the wins otherwise).
-            wins += top_score - 2.0 * log_g > 0 && (top_score >= best - kStabilityTie || equivalent(best_f, top_fam)) ? 1 : 0;
+            wins += top_score - 2.0 * log_g > 0 && (top_score >= best - kStabilityTie || equivalent_to_top(best_f)) ? 1 : 0;
         }
         top.stability = static_cast<double>(wins) / kStabilityResamples;
     }
@@ -259,7 +264,6 @@ const sim::TermFactor* period_factor(const sim::Term& t) {
     }
     return nullptr;
 }
-
 
 std::vector<sim::Term> refine_period(const RunSignals& s, const ScreenInput& in, const GenericEvidence& best,
                                      std::uint64_t seed) {
