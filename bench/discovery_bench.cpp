@@ -4,6 +4,9 @@
 // before/after (truth 0.08 N m, the datasheet), and the time of one discover().
 // Sets (tests/support/discovery_cases.hpp): the 7 library effects, the development cases, the
 // held-out cases (never used to tune), and clean runs (false claims).
+// Set dynbrk (not in the default list): pairs of a DYN and a BRK run of one actuator with the same
+// injected term, discovered together (docs/discovery.md "Across DYN and BRK"): what the BRK run's
+// breakaway asymmetry and the DYN trajectory name together; the clean pairs count false claims.
 // Usage: discovery_bench [runs_per_case=1] [seed=11] [noise=typical|none] [sets=library,dev,heldout,clean]
 //                        [clean_runs=10] [plot_dir=]
 // With plot_dir, the SVG of every unexplained structure is written there (CASE_SEED.svg).
@@ -11,6 +14,7 @@
 #include "core/sim_run.hpp"
 #include "discovery/candidate_effect.hpp"
 #include "discovery/discovery.hpp"
+#include "discovery/multi_run.hpp"
 #include "discovery/residual_plot.hpp"
 
 #include <algorithm>
@@ -100,6 +104,104 @@ double median(std::vector<double> v) {
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
+/// One DYN + BRK case: the term (empty: clean), the expected name at rest (empty: nothing at rest).
+struct PairCase {
+    const char* id;
+    const char* pattern;  ///< with {a}
+    double lo, hi;
+    bool random_sign;
+    const char* expected;
+};
+constexpr PairCase kPairCases[] = {
+    {"constant-torque", "torque: {a}", 0.003, 0.006, true, "constant_torque"},
+    {"hinge-sensor-offset", "hinge: {a}", 2.5, 5.0, true, "hinge_sensor_offset"},
+    {"current-sensor-offset", "current: {a}", 0.02, 0.05, true, ""},
+    {"current-offset-dyn-names", "current: {a}", 0.08, 0.2, true, ""},
+    {"friction-with-deflection", "torque: {a}*sgn(w)*abs(theta_u)", 0.004, 0.008, false, ""},
+};
+
+/// The dynbrk set: one row per pair, then the false claims on clean pairs.
+void run_pairs(int runs, int clean_runs, std::mt19937_64& g, std::uint64_t& run_seed, emadiag::sim::NoiseProfile noise) {
+    std::printf("\nacross DYN and BRK (case B; each pair: a DYN and a BRK run of one actuator, the same term, own noise seeds)\n");
+    std::printf("(verdicts: named: found across DYN and BRK as injected; dyn+brk: named by the DYN run, the BRK run agrees;\n"
+                " ok: nothing at rest injected or claimed; CLAIM: an offset at rest claimed where none was; not-cmp: not compared)\n");
+    std::printf("%-26s %-28s | %-40s %-7s | %-24s | %-7s | %-15s | %-15s | %s\n", "case", "injected", "named at rest", "verdict",
+                "size found (se)", "BRK z", "DYN cost mdl/with", "FDJ N m bef/aft", "time s");
+    std::map<std::string, int> verdicts;
+    std::vector<std::pair<const PairCase*, int>> list;
+    for (const auto& pc : kPairCases) list.emplace_back(&pc, runs);
+    for (const auto& [pc, n] : list) {
+        for (int r = 0; r < n; ++r) {
+            double a = tc::uniform(g, pc->lo, pc->hi);
+            if (pc->random_sign && tc::uniform(g, 0, 1) < 0.5) a = -a;
+            std::string text = pc->pattern;
+            char buf[32];
+            std::snprintf(buf, sizeof buf, "%.6g", a);
+            text.replace(text.find("{a}"), 3, buf);
+            emadiag::sim::SimConfig dyn, brk;
+            dyn.load_case = brk.load_case = emadiag::sim::LoadCase::B;
+            dyn.sequence = emadiag::sim::Sequence::Dyn;
+            brk.sequence = emadiag::sim::Sequence::Brk;
+            dyn.noise = brk.noise = noise;
+            dyn.seed = ++run_seed;
+            brk.seed = ++run_seed;
+            dyn.params.terms.push_back(emadiag::sim::parse_term(text));
+            brk.params.terms = dyn.params.terms;
+            std::vector<emadiag::Run> pair = {emadiag::make_run(dyn, emadiag::sim::simulate(dyn)),
+                                              emadiag::make_run(brk, emadiag::sim::simulate(brk))};
+            const auto t0 = std::chrono::steady_clock::now();
+            const auto rep = emadiag::discovery::discover_runs(pair, {"dyn", "brk"});
+            const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            const auto& b = rep.breakaways.at(0);
+            std::string named = b.terms.empty() ? (b.significant ? "not named" : "none") : b.key;
+            if (b.equivalent) named += " (~" + b.hypotheses[1].key + ")";
+            std::string verdict;
+            const std::string expected = pc->expected;
+            const auto dyn_named = rep.reports.at(0).added_effects();
+            const bool dyn_has = !expected.empty() && std::find(dyn_named.begin(), dyn_named.end(), expected) != dyn_named.end();
+            if (!dyn_named.empty()) named += " [DYN: " + join(dyn_named) + "]";
+            if (!b.problem.empty()) verdict = "not-cmp";
+            else if (expected.empty()) verdict = b.terms.empty() && !b.significant ? "ok" : "CLAIM";
+            else if (dyn_has && !b.significant) verdict = "dyn+brk";
+            else if (b.key == expected && !b.equivalent) verdict = "named";
+            else if (b.equivalent && (b.hypotheses[0].key == expected || b.hypotheses[1].key == expected)) verdict = "equiv";
+            else if (!b.terms.empty()) verdict = "WRONG";
+            else verdict = "missed";
+            ++verdicts[verdict];
+            char size[64] = "-";
+            if (!b.terms.empty()) {
+                const double z = (b.terms.front().coefficient - a) / b.terms.front().std_error;
+                std::snprintf(size, sizeof size, "%.4g (%.2g) %+.1f se", b.terms.front().coefficient, b.terms.front().std_error, z);
+            }
+            const double fdj_after = b.terms.empty() ? NAN : b.hypotheses.front().fdj_nm;
+            const double cost_with = b.terms.empty() ? NAN : b.hypotheses.front().dyn_cost;
+            std::printf("%-26s %-28s | %-40s %-7s | %-24s | %7.2f | %6.2f %6.2f | %.4f %.4f | %.2f\n", pc->id, text.c_str(),
+                        named.c_str(), verdict.c_str(), size, b.z, b.dyn_cost_model, cost_with, b.fdj_before_nm, fdj_after, secs);
+            std::fflush(stdout);
+        }
+    }
+    int claims = 0;
+    for (int r = 0; r < clean_runs; ++r) {
+        emadiag::sim::SimConfig dyn, brk;
+        dyn.load_case = brk.load_case = emadiag::sim::LoadCase::B;
+        dyn.sequence = emadiag::sim::Sequence::Dyn;
+        brk.sequence = emadiag::sim::Sequence::Brk;
+        dyn.noise = brk.noise = noise;
+        dyn.seed = ++run_seed;
+        brk.seed = ++run_seed;
+        const auto rep = emadiag::discovery::discover_runs(
+            {emadiag::make_run(dyn, emadiag::sim::simulate(dyn)), emadiag::make_run(brk, emadiag::sim::simulate(brk))}, {"dyn", "brk"});
+        const auto& b = rep.breakaways.at(0);
+        if (b.significant || !b.terms.empty()) {
+            ++claims;
+            std::printf("clean pair %d: CLAIM %s\n", r, b.verdict.c_str());
+        }
+    }
+    std::printf("verdicts across DYN and BRK:");
+    for (const auto& [v, n] : verdicts) std::printf(" %s %d", v.c_str(), n);
+    std::printf("; clean pairs: %d claims at rest in %d\n", claims, clean_runs);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -144,6 +246,12 @@ int main(int argc, char** argv) {
             c.injected = "-";
             cases.push_back(c);
         }
+    }
+    if (listed(sets, "dynbrk")) {
+        // Its own draws, so listing it leaves the other sets' cases as they were.
+        std::mt19937_64 gp(seed + 1);
+        std::uint64_t pair_seed = seed * 1000 + 900;
+        run_pairs(runs, clean_runs, gp, pair_seed, emadiag::sim::parse_noise(noise));
     }
     std::printf("\n%-8s %-26s %-44s | %-44s %-8s | %-17s | %-13s | %-15s | %s\n", "set", "case", "injected", "named",
                 "verdict", "current A bef/aft", "traj cost b/a", "FDJ N m bef/aft", "time s (wall, cpu)");

@@ -96,6 +96,7 @@ void print_text(std::ostream& os, const std::string& path, const discovery::Disc
                << '\n';
         }
         if (!s.rejected_by_fit.empty()) os << "  " << s.rejected_by_fit << '\n';
+        if (!s.withheld.empty()) os << "  " << s.withheld << '\n';
         if (s.added || !s.added_terms.empty()) {
             os << "  added " << s.name_key << " (" << s.name_text << "); re-simulation fit (" << s.simulations
                << " simulations):";

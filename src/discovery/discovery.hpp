@@ -37,6 +37,11 @@ struct DiscoveryOptions {
 /// Two hypotheses are told apart by the trajectory when the worse one's cost is at least this many
 /// times the better one's (and above it by a margin, discovery.cpp); cost 1 = the noise floor.
 inline constexpr double kHypothesisRatio = 1.25;
+/// ... and only when the worse cost is also at least this far above the better one.
+inline constexpr double kHypothesisMinCostGap = 0.1;
+/// Two trajectory costs the trajectory does not tell apart: the worse below `ratio` times the better,
+/// or within kHypothesisMinCostGap of it.
+[[nodiscard]] bool not_told_apart(double cost_a, double cost_b, double ratio);
 
 /// One explanation of a signature in the torque residual, re-simulated: a library effect, or terms.
 /// Hypotheses that leave the same torque residual (a sensor offset and a real torque) are told
@@ -62,6 +67,8 @@ struct DiscoveryStep {
     double trajectory_before = 0, trajectory_after = 0;
     std::vector<FittedValue> fitted;  ///< values and standard errors of the re-simulation fit
     std::string rejected_by_fit;      ///< why the winner was not added after its fit (empty if added)
+    std::string withheld;             ///< why the winner was not even fitted: a better explanation of the
+                                      ///< same structure is below kMinEffectPeakNm (empty otherwise)
     double fit_delta_bic = 0;         ///< the criterion on the re-simulated cost, without vs with the effect
     int simulations = 0;
     ErrorMetrics error_after;

@@ -1,6 +1,7 @@
 #include "discovery/multi_run.hpp"
 
 #include "core/emadiag_error.hpp"
+#include "discovery/breakaway_across.hpp"
 #include "discovery/physics_names.hpp"
 #include "estimation/health_estimate.hpp"
 #include "discovery/term_library.hpp"
@@ -66,14 +67,36 @@ AcrossRunsReport discover_runs(const std::vector<Run>& runs, const std::vector<s
     if (runs.size() != labels.size()) throw EmadiagError("discover_runs: runs and labels differ in number");
     AcrossRunsReport out;
     std::vector<const Run*> analysed;
+    std::vector<std::size_t> analysed_index;  // into `runs`
+    std::vector<std::size_t> brk_runs;
     for (std::size_t i = 0; i < runs.size(); ++i) {
+        if (runs[i].sequence == "brk") {  // compared with a DYN run below
+            brk_runs.push_back(i);
+            continue;
+        }
         try {
             out.reports.push_back(discover(runs[i], options));
             out.labels.push_back(labels[i]);
             analysed.push_back(&runs[i]);
+            analysed_index.push_back(i);
         } catch (const EmadiagError& e) {
             out.skipped.push_back(labels[i] + ": " + e.what());
         }
+    }
+    // Across DYN and BRK: each BRK run against the nearest analysed run in the order given (the
+    // earlier one on a tie: a session's DYN run comes before its BRK run).
+    for (std::size_t b : brk_runs) {
+        if (analysed.empty()) {
+            out.skipped.push_back(labels[b] + ": a BRK run is compared with a DYN run of the same actuator (breakaway "
+                                              "thresholds against its model), and none could be analysed");
+            continue;
+        }
+        std::size_t pick = 0;
+        for (std::size_t k = 1; k < analysed_index.size(); ++k) {
+            const auto dist = [&](std::size_t i) { return i > b ? i - b : b - i; };
+            if (dist(analysed_index[k]) < dist(analysed_index[pick])) pick = k;
+        }
+        out.breakaways.push_back(breakaway_across(runs[b], labels[b], *analysed[pick], out.labels[pick], out.reports[pick]));
     }
     if (out.reports.empty()) {
         std::string why;
@@ -193,6 +216,7 @@ std::string AcrossRunsReport::summary() const {
         for (const auto& t : joint_terms) s += t.text() + (&t == &joint_terms.back() ? "" : ", ");
         s += "), found only in the runs together\n";
     }
+    for (const auto& b : breakaways) s += "across DYN and BRK (" + b.brk_label + " with " + b.dyn_label + "): " + b.verdict + "\n";
     for (const auto& e : effects) {
         s += "across the runs: " + e.text + " (" + e.parameter + ") in " + std::to_string(e.runs.size()) + " runs, mean " +
              fmt(e.mean) + (e.changes ? ", CHANGES from run to run: slope " + fmt(e.slope_per_run) + " +/- " +
@@ -225,6 +249,8 @@ nlohmann::json AcrossRunsReport::to_json() const {
         j["joint_finding"] = {{"name", joint_key}, {"physics", joint_text}, {"terms", terms},
                               {"trajectory_cost_before", joint_cost_before}, {"trajectory_cost_after", joint_cost_after}};
     }
+    j["across_dyn_and_brk"] = nlohmann::json::array();
+    for (const auto& b : breakaways) j["across_dyn_and_brk"].push_back(b.to_json());
     j["effects_across_runs"] = nlohmann::json::array();
     for (const auto& e : effects) {
         j["effects_across_runs"].push_back({{"name", e.key}, {"physics", e.text}, {"parameter", e.parameter},
@@ -254,6 +280,11 @@ FindingRecord finding_record(const AcrossRunsReport& report) {
         for (const auto& t : report.joint_terms) terms.push_back(sim::to_json(t));
         r.model["joint_terms"] = terms;
     }
+    nlohmann::json rest = nlohmann::json::array();
+    for (const auto& b : report.breakaways) {
+        for (const auto& t : b.terms) rest.push_back(sim::to_json(t));
+    }
+    if (!rest.empty()) r.model["rest_offset_terms"] = rest;
     return r;
 }
 

@@ -8,7 +8,10 @@
 //      down;
 //   3. the effects found in two runs or more compared across the runs in the order given (oldest
 //      first, e.g. sessions over days): the weighted mean, the chi-square of consistency and the
-//      weighted slope per run, so an effect that changes over sessions shows as a trend.
+//      weighted slope per run, so an effect that changes over sessions shows as a trend;
+//   4. each BRK run's breakaway thresholds against the model of the nearest DYN run
+//      (breakaway_across.hpp): an offset at rest sized by the BRK run and named by the DYN run.
+#include "discovery/breakaway_across.hpp"
 #include "discovery/discovery.hpp"
 
 #include <nlohmann/json.hpp>
@@ -38,13 +41,14 @@ struct AcrossRunsReport {
     std::vector<double> joint_cost_before, joint_cost_after;  ///< per analysed run
     bool joint_confirmed = false;
     std::vector<AcrossRunsEffect> effects;  ///< step 3
+    std::vector<BreakawayAcross> breakaways;  ///< step 4: each BRK run against a DYN run (breakaway_across.hpp)
 
     [[nodiscard]] std::string summary() const;
     [[nodiscard]] nlohmann::json to_json() const;
 };
 
-/// Runs must have distinct labels (paths, or run ids); a run discovery cannot analyse (a BRK run)
-/// is skipped with its reason. Throws EmadiagError when no run can be analysed.
+/// Runs must have distinct labels (paths, or run ids); a run discovery cannot analyse is skipped with
+/// its reason. A BRK run is compared with the nearest analysed run in the order given (step 4). Throws EmadiagError when no run can be analysed.
 [[nodiscard]] AcrossRunsReport discover_runs(const std::vector<Run>& runs, const std::vector<std::string>& labels,
                                              const DiscoveryOptions& options = {});
 

@@ -287,8 +287,13 @@ TEST(ManyRuns, SkipsWhatCannotBeAnalysedAndComparesAnEffectAcrossRuns) {
                                    run_with_term("torque: 8e-8*sgn(w)*sq(w)", 4302), brk_run};
     const AcrossRunsReport r = discover_runs(runs, {"a", "b", "brk"});
     ASSERT_EQ(r.reports.size(), 2u);
-    ASSERT_EQ(r.skipped.size(), 1u);
-    EXPECT_THAT(r.skipped.front(), HasSubstr("brk"));
+    // The BRK run is not screened: its breakaway thresholds are compared with the nearest DYN run's
+    // model ("b"), and agree with it (nothing at rest was injected).
+    EXPECT_TRUE(r.skipped.empty());
+    ASSERT_EQ(r.breakaways.size(), 1u);
+    EXPECT_EQ(r.breakaways.front().dyn_label, "b");
+    EXPECT_FALSE(r.breakaways.front().significant) << r.breakaways.front().verdict;
+    EXPECT_TRUE(r.breakaways.front().terms.empty());
     ASSERT_EQ(r.effects.size(), 1u) << r.summary();
     EXPECT_EQ(r.effects.front().key, "friction_speed_squared");
     EXPECT_FALSE(r.effects.front().changes) << r.summary();
@@ -296,7 +301,105 @@ TEST(ManyRuns, SkipsWhatCannotBeAnalysedAndComparesAnEffectAcrossRuns) {
     const FindingRecord rec = finding_record(r);
     EXPECT_THAT(rec.summary, HasSubstr("friction growing with the square of the speed"));
     EXPECT_TRUE(rec.model.contains("terms"));
-    EXPECT_THROW((void)discover_runs({brk_run}, {"brk"}), EmadiagError);
+    try {
+        (void)discover_runs({brk_run}, {"brk"});
+        ADD_FAILURE() << "a BRK run alone was analysed";
+    } catch (const EmadiagError& e) {
+        EXPECT_THAT(e.what(), HasSubstr("compared with a DYN run"));
+    }
+}
+
+TEST(OpenWorld, NoLesserExplanationIsNamedInPlaceOfOneBelowTheSizeFloor) {
+    // Regression (session 9, seed 21 used to examine it): a constant torque of 0.004 N m. The
+    // screening's best explanation (hinge_offset, a constant torque on the shaft) peaked at 0.0044 N m,
+    // below the 0.005 N m floor, and "torque ~ t" (half its delta BIC, but peaking at twice its mean)
+    // was named in its place: a wrong name. Now nothing is named, and the residual is reported.
+    const DiscoveryReport r = discover(run_with_term("torque: 0.004", 21));
+    EXPECT_TRUE(r.added_effects().empty()) << r.summary();
+    bool withheld = false;
+    for (const auto& st : r.steps) withheld = withheld || st.withheld.find("below the 0.005 N m floor") != std::string::npos;
+    EXPECT_TRUE(withheld);
+    ASSERT_NE(r.unexplained(), nullptr) << r.summary();
+}
+
+emadiag::Run brk_with_term(const std::string& term, std::uint64_t seed) {
+    sim::SimConfig c;
+    c.load_case = sim::LoadCase::B;
+    c.sequence = sim::Sequence::Brk;
+    c.noise = sim::NoiseProfile::Typical;
+    c.seed = seed;
+    if (!term.empty()) c.params.terms.push_back(sim::parse_term(term));
+    return make_run(c, sim::simulate(c));
+}
+
+// Across DYN and BRK (docs/discovery.md): seeds 6101-6304 were not used to develop it (that used
+// 21/22, 31/32 and the clean pairs 3002-3081 of the note in docs/discovery.md).
+TEST(AcrossDynAndBrk, AConstantTorqueTooSmallForTheDynRunIsSizedByTheBrkRunAndNamedByTheDynRun) {
+    const std::string term = "torque: 0.004";
+    const AcrossRunsReport r = discover_runs({run_with_term(term, 6101), brk_with_term(term, 6102)}, {"dyn", "brk"});
+    ASSERT_EQ(r.reports.size(), 1u);
+    // The DYN run alone names nothing: the best explanation is below the size floor.
+    EXPECT_TRUE(r.reports.front().added_effects().empty()) << r.reports.front().summary();
+    ASSERT_EQ(r.breakaways.size(), 1u);
+    const BreakawayAcross& b = r.breakaways.front();
+    EXPECT_TRUE(b.significant) << b.verdict;
+    ASSERT_EQ(b.terms.size(), 1u) << b.verdict;
+    EXPECT_EQ(b.key, "constant_torque") << b.verdict;
+    EXPECT_FALSE(b.equivalent) << b.verdict;
+    EXPECT_NEAR(b.terms.front().coefficient, 0.004, 3.0 * b.terms.front().std_error) << b.verdict;
+    EXPECT_LT(b.hypotheses.front().dyn_cost, b.dyn_cost_model);
+    EXPECT_THAT(r.summary(), HasSubstr("found across DYN and BRK: constant torque"));
+    const FindingRecord rec = finding_record(r);
+    ASSERT_TRUE(rec.model.contains("rest_offset_terms"));
+    EXPECT_EQ(rec.model["rest_offset_terms"].size(), 1u);
+}
+
+TEST(AcrossDynAndBrk, AHingeSensorOffsetIsToldApartFromATorqueByTheDynTrajectory) {
+    const std::string term = "hinge: 3.5";
+    const AcrossRunsReport r = discover_runs({run_with_term(term, 6201), brk_with_term(term, 6202)}, {"dyn", "brk"});
+    ASSERT_EQ(r.breakaways.size(), 1u);
+    const BreakawayAcross& b = r.breakaways.front();
+    ASSERT_EQ(b.terms.size(), 1u) << b.verdict;
+    EXPECT_EQ(b.key, "hinge_sensor_offset") << b.verdict;
+    EXPECT_NEAR(b.terms.front().coefficient, 3.5, 3.0 * b.terms.front().std_error) << b.verdict;
+    bool torque_examined = false;
+    for (const auto& h : b.hypotheses) torque_examined = torque_examined || h.key == "constant_torque";
+    EXPECT_TRUE(torque_examined) << b.to_json().dump();
+}
+
+TEST(AcrossDynAndBrk, ACurrentSensorOffsetTheControllerDoesNotSeeLeavesTheThresholdsAlone) {
+    // The recorded current is off; the controller's own is not, so the breakaways are where the model
+    // puts them: no offset at rest is claimed.
+    const std::string term = "current: -0.03";
+    const AcrossRunsReport r = discover_runs({run_with_term(term, 6301), brk_with_term(term, 6302)}, {"dyn", "brk"});
+    ASSERT_EQ(r.breakaways.size(), 1u);
+    EXPECT_FALSE(r.breakaways.front().significant) << r.breakaways.front().verdict;
+    EXPECT_TRUE(r.breakaways.front().terms.empty());
+}
+
+TEST(AcrossDynAndBrk, ACurrentSensorOffsetNamedByTheDynRunIsTakenOutOfTheBrkRun) {
+    // A recorded current 0.1 A high: the BRK run's breakaway analysis, which reads the recorded
+    // current, misses a ramp end. The DYN run names the offset; with it removed from the BRK run the
+    // thresholds come back to the FSJ (0.12 N m) and agree with the model.
+    const std::string term = "current: 0.1";
+    const AcrossRunsReport r = discover_runs({run_with_term(term, 6501), brk_with_term(term, 6502)}, {"dyn", "brk"});
+    ASSERT_EQ(r.reports.size(), 1u);
+    EXPECT_THAT(r.reports.front().added_effects(), Contains("current_sensor_offset"));
+    ASSERT_EQ(r.breakaways.size(), 1u);
+    const BreakawayAcross& b = r.breakaways.front();
+    EXPECT_TRUE(b.problem.empty()) << b.verdict;
+    EXPECT_THAT(b.sensor_correction, HasSubstr("current:"));
+    EXPECT_NEAR(b.fsj_nm, 0.12, 0.004) << b.verdict;
+    EXPECT_FALSE(b.significant) << b.verdict;
+}
+
+TEST(AcrossDynAndBrk, CleanPairsClaimNothing) {
+    for (std::uint64_t seed = 6401; seed < 6407; seed += 2) {
+        const AcrossRunsReport r = discover_runs({run_with_term("", seed), brk_with_term("", seed + 1)}, {"dyn", "brk"});
+        ASSERT_EQ(r.breakaways.size(), 1u);
+        EXPECT_LT(std::abs(r.breakaways.front().z), kBrkAsymmetryMinZ) << r.breakaways.front().verdict;
+        EXPECT_TRUE(r.breakaways.front().terms.empty()) << r.breakaways.front().verdict;
+    }
 }
 
 TEST(ManyRuns, AnEffectTooWeakForEachRunIsFoundOnlyInTheRunsTogether) {
