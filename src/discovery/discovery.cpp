@@ -1544,6 +1544,7 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
                 ea.text = n.text;
                 for (auto it = fit.params.terms.end() - static_cast<std::ptrdiff_t>(names.size() - 1); it != fit.params.terms.end(); ++it) {
                     ea.change += (ea.change.empty() ? "" : ", ") + it->text();
+                    ea.terms.push_back(*it);
                 }
                 ea.cost_alternative = trajectory_error(s, fit.signals, floor).cost;
                 const double lo = std::min(ea.cost_model, ea.cost_alternative), hi = std::max(ea.cost_model, ea.cost_alternative);

@@ -133,6 +133,7 @@ struct EfficiencyAlternative {
     double eta_o = 0, eta_o_se = 0;      ///< the model's
     double eta_o_datasheet = 0;
     std::string key, text, change;       ///< the friction found with eta_O at the datasheet value
+    std::vector<sim::Term> terms;        ///< ... as terms (fitted)
     double cost_model = 0, cost_alternative = 0;  ///< trajectory costs (1 = noise floor)
     bool equivalent = false;             ///< not told apart by the trajectory
     bool favoured = false;               ///< the trajectory favours the friction over the efficiency change

@@ -1,6 +1,7 @@
 #include "discovery/multi_run.hpp"
 
 #include "core/emadiag_error.hpp"
+#include "discovery/across_loads.hpp"
 #include "discovery/breakaway_across.hpp"
 #include "discovery/physics_names.hpp"
 #include "estimation/health_estimate.hpp"
@@ -160,6 +161,8 @@ AcrossRunsReport discover_runs(const std::vector<Run>& runs, const std::vector<s
             }
         }
     }
+    // Across load cases: an efficiency change or a friction that follows the load on one run.
+    if (options.open_world && out.reports.size() >= 2) out.loads = across_loads(analysed, out.labels, out.reports);
     // 3. The effects found in two runs or more, compared across the runs.
     std::map<std::string, AcrossRunsEffect> by_key;
     std::vector<std::string> order;
@@ -216,6 +219,11 @@ std::string AcrossRunsReport::summary() const {
         for (const auto& t : joint_terms) s += t.text() + (&t == &joint_terms.back() ? "" : ", ");
         s += "), found only in the runs together\n";
     }
+    if (loads.ran) {
+        s += "across load cases (";
+        for (std::size_t i = 0; i < loads.load_cases.size(); ++i) s += (i ? ", " : "") + loads.load_cases[i];
+        s += "): " + loads.verdict + "\n";
+    }
     for (const auto& b : breakaways) s += "across DYN and BRK (" + b.brk_label + " with " + b.dyn_label + "): " + b.verdict + "\n";
     for (const auto& e : effects) {
         s += "across the runs: " + e.text + " (" + e.parameter + ") in " + std::to_string(e.runs.size()) + " runs, mean " +
@@ -249,6 +257,7 @@ nlohmann::json AcrossRunsReport::to_json() const {
         j["joint_finding"] = {{"name", joint_key}, {"physics", joint_text}, {"terms", terms},
                               {"trajectory_cost_before", joint_cost_before}, {"trajectory_cost_after", joint_cost_after}};
     }
+    j["across_load_cases"] = loads.to_json();
     j["across_dyn_and_brk"] = nlohmann::json::array();
     for (const auto& b : breakaways) j["across_dyn_and_brk"].push_back(b.to_json());
     j["effects_across_runs"] = nlohmann::json::array();
@@ -285,6 +294,7 @@ FindingRecord finding_record(const AcrossRunsReport& report) {
         for (const auto& t : b.terms) rest.push_back(sim::to_json(t));
     }
     if (!rest.empty()) r.model["rest_offset_terms"] = rest;
+    if (report.loads.ran && !report.loads.key.empty()) r.model["across_load_cases"] = report.loads.to_json()["finding"];
     return r;
 }
 

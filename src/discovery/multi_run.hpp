@@ -10,7 +10,10 @@
 //      first, e.g. sessions over days): the weighted mean, the chi-square of consistency and the
 //      weighted slope per run, so an effect that changes over sessions shows as a trend;
 //   4. each BRK run's breakaway thresholds against the model of the nearest DYN run
-//      (breakaway_across.hpp): an offset at rest sized by the BRK run and named by the DYN run.
+//      (breakaway_across.hpp): an offset at rest sized by the BRK run and named by the DYN run;
+//   5. across load cases (across_loads.hpp): an efficiency change and a friction that follows the
+//      load on one run, told apart by runs at other loads.
+#include "discovery/across_loads.hpp"
 #include "discovery/breakaway_across.hpp"
 #include "discovery/discovery.hpp"
 
@@ -42,6 +45,7 @@ struct AcrossRunsReport {
     bool joint_confirmed = false;
     std::vector<AcrossRunsEffect> effects;  ///< step 3
     std::vector<BreakawayAcross> breakaways;  ///< step 4: each BRK run against a DYN run (breakaway_across.hpp)
+    AcrossLoads loads;                        ///< step 5: efficiency or friction, across load cases (across_loads.hpp)
 
     [[nodiscard]] std::string summary() const;
     [[nodiscard]] nlohmann::json to_json() const;

@@ -434,5 +434,66 @@ TEST(ManyRuns, AnEffectTooWeakForEachRunIsFoundOnlyInTheRunsTogether) {
     EXPECT_THAT(r.summary(), HasSubstr("found only in the runs together"));
 }
 
+
+emadiag::Run run_at(sim::LoadCase load, const std::string& term, std::uint64_t seed) {
+    sim::SimConfig c;
+    c.load_case = load;
+    c.sequence = sim::Sequence::Dyn;
+    c.noise = sim::NoiseProfile::Typical;
+    c.seed = seed;
+    if (!term.empty()) c.params.terms.push_back(sim::parse_term(term));
+    return make_run(c, sim::simulate(c));
+}
+
+// Across load cases (docs/discovery.md): seeds 7101-7204 were not used to develop it.
+TEST(AcrossLoadCases, AFrictionGrowingWithTheDeflectionIsToldFromAnEfficiencyByAGroundRun) {
+    // In case B the hinge moment grows with the deflection: eta_O below the datasheet and a friction
+    // ~ sgn(w) |theta_u| fit the same run. On the ground (case A, almost no load) an efficiency does
+    // nothing and the friction does everything.
+    const std::string term = "torque: 0.003*sgn(w)*abs(theta_u)";
+    const AcrossRunsReport r =
+        discover_runs({run_at(sim::LoadCase::B, term, 7101), run_at(sim::LoadCase::A, term, 7102)}, {"flight", "ground"});
+    ASSERT_TRUE(r.loads.ran) << r.loads.skipped;
+    EXPECT_EQ(r.loads.key, "friction_deflection") << r.loads.verdict;
+    EXPECT_FALSE(r.loads.equivalent) << r.loads.verdict;
+    ASSERT_EQ(r.loads.terms.size(), 1u);
+    EXPECT_NEAR(r.loads.terms.front().coefficient, 0.003, 3.0 * r.loads.terms.front().std_error + 1e-4) << r.loads.verdict;
+    const LoadHypothesis* eff = nullptr;
+    for (const auto& h : r.loads.hypotheses) eff = h.key == "efficiency" ? &h : eff;
+    ASSERT_NE(eff, nullptr);
+    EXPECT_GT(eff->mean_cost, kHypothesisRatio * r.loads.hypotheses.front().mean_cost);
+    EXPECT_THAT(r.summary(), HasSubstr("across load cases (B, A): the load cases tell: friction growing with the deflection"));
+    EXPECT_TRUE(finding_record(r).model.contains("across_load_cases"));
+}
+
+TEST(AcrossLoadCases, AFrictionGrowingWithTheLoadIsNeverTakenForOneGrowingWithTheDeflection) {
+    // Friction ~ sgn(w) |F_R| in flight and on the load rig (A-ext, the load ramps with time): the
+    // deflection friction, the flight run's alternative, is rejected; the efficiency and the friction
+    // with the load remain (they differ only between aiding and opposing loads).
+    const std::string term = "torque: 0.03*sgn(w)*abs(F_R)";
+    const AcrossRunsReport r =
+        discover_runs({run_at(sim::LoadCase::B, term, 7201), run_at(sim::LoadCase::AExt, term, 7202)}, {"flight", "rig"});
+    ASSERT_TRUE(r.loads.ran) << r.loads.skipped;
+    ASSERT_GE(r.loads.hypotheses.size(), 3u);
+    EXPECT_NE(r.loads.key, "friction_deflection") << r.loads.verdict;
+    EXPECT_THAT((std::vector<std::string>{"efficiency", "friction_load"}), Contains(r.loads.key)) << r.loads.verdict;
+    for (const auto& h : r.loads.hypotheses) {
+        if (h.key == "friction_deflection") {
+            EXPECT_GT(h.mean_cost, 10.0 * r.loads.hypotheses.front().mean_cost) << r.loads.verdict;
+        }
+        if (h.key == "friction_load") {
+            EXPECT_NEAR(h.pooled, 0.03, 3.0 * h.pooled_se + 1e-3) << r.loads.verdict;
+        }
+    }
+}
+
+TEST(AcrossLoadCases, RunsOfOneLoadCaseSkipIt) {
+    const std::string term = "torque: 0.003*sgn(w)*abs(theta_u)";
+    const AcrossRunsReport r =
+        discover_runs({run_at(sim::LoadCase::B, term, 7203), run_at(sim::LoadCase::B, term, 7204)}, {"a", "b"});
+    EXPECT_FALSE(r.loads.ran);
+    EXPECT_THAT(r.loads.skipped, HasSubstr("one load case"));
+}
+
 }  // namespace
 }  // namespace emadiag::discovery
