@@ -25,9 +25,13 @@
 //  3. the asymmetry A = ((S_+ - S_+,model) - (S_- - S_-,model)) / 2 and z = A / se(A); the BRK run
 //     agrees with the model when |z| < kBrkAsymmetryMinZ;
 //  4. otherwise each constant term a BRK run can see (torque, hinge moment, current, angle: a probe
-//     re-simulated on the BRK sequence gives its asymmetry per unit) sized to A;
-//  5. each one added to the DYN model, the health refitted on the DYN trajectory: the best cost names
-//     the offset when it beats the model's own refit; two within not_told_apart are both reported.
+//     re-simulated on the BRK sequence gives its asymmetry per unit) sized to A; when the DYN model
+//     has torque terms that act at rest (no speed factor), each also in their place, sized to the
+//     asymmetry beyond the model without them (the DYN run may have misnamed the offset);
+//  5. each one added to the DYN model, the health refitted on the DYN trajectory: the BRK run shows
+//     the offset exists, the DYN run tells the candidates apart; the best cost names it unless the
+//     DYN trajectory refutes it (worse than the model's own refit beyond not_told_apart); two names
+//     within not_told_apart of each other are both reported.
 #include "discovery/discovery.hpp"
 
 #include <nlohmann/json.hpp>
@@ -54,6 +58,7 @@ struct RestOffsetHypothesis {
     double dyn_cost = 0;             ///< DYN trajectory cost with the term, health refitted on the trajectory
     TrajectoryError dyn_error;
     double fdj_nm = 0, fdj_se_nm = 0;  ///< FDJ of that refit
+    std::string replaces;            ///< the DYN model's terms acting at rest it replaces (empty: added to them)
 };
 
 struct BreakawayAcross {
@@ -70,7 +75,7 @@ struct BreakawayAcross {
     double dyn_cost_model = 0;       ///< ... with its health refitted on the trajectory (no new term)
     double fdj_before_nm = 0;        ///< the DYN run's model's FDJ (found with the offset unmodelled)
     std::vector<RestOffsetHypothesis> hypotheses;  ///< those that can explain it, best DYN cost first
-    bool rejected = false;           ///< candidates examined, none confirmed by the DYN trajectory
+    bool rejected = false;           ///< candidates examined, every one refuted by the DYN trajectory
     bool equivalent = false;         ///< the best two are not told apart by the DYN trajectory
     std::vector<sim::Term> terms;    ///< the finding: the best hypothesis's term (empty when none)
     std::string key, text, verdict;
