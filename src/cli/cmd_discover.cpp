@@ -90,7 +90,8 @@ void print_text(std::ostream& os, const std::string& path, const discovery::Disc
             for (const auto& h : s.hypotheses) {
                 os << "    " << std::left << std::setw(24) << h.key << " cost " << std::setw(9) << fmt(h.cost) << " current "
                    << fmt(h.error.current_a) << " A, speed " << fmt(h.error.speed_rad_s) << " rad/s, theta "
-                   << fmt(h.error.theta_rad) << " rad, load " << fmt(h.error.load_nm) << " N m  (" << h.change << ")\n";
+                   << fmt(h.error.theta_rad) << " rad, load " << fmt(h.error.load_nm) << " N m  (" << h.change << ")"
+                   << (h.refit_on_trajectory ? " [cost after a refit on the trajectory]" : "") << '\n';
             }
             os << "    " << (s.equivalent ? "EQUIVALENT on this run: both are reported" : "told apart: " + s.hypotheses.front().key)
                << '\n';

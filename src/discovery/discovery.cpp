@@ -108,6 +108,10 @@ constexpr std::uint64_t kEfficiencyScreenSeed = 7;
 /// values), and the time goal of one discover() (2 s of CPU) leaves room for about four batches of a
 /// model with a periodic term (a sine per step and lane).
 constexpr int kFinalRefitIterations = 4;
+/// The hypotheses' refit on the trajectory (refit_close_hypotheses_on_trajectory): the best two
+/// above this cost and within this ratio of each other.
+constexpr double kHypothesisRefitAboveCost = 1.5;
+constexpr double kHypothesisRefitRatio = 2.0;
 /// Smallest RMS (in noise floors) of a position sensor offset and drift the sensor stage adds.
 constexpr double kSensorMinRmsFloors = kStructureMinExcessTheta;
 /// The sensor stage's offset and drift must together explain this share of the angle residual's sum
@@ -944,7 +948,7 @@ nlohmann::json DiscoveryReport::to_json() const {
             js["hypotheses"].push_back({{"name", h.key}, {"physics", h.text}, {"change", h.change},
                                         {"trajectory_cost", h.cost}, {"current_rms_A", h.error.current_a},
                                         {"speed_rms_rad_s", h.error.speed_rad_s}, {"theta_rms_rad", h.error.theta_rad},
-                                        {"load_rms_Nm", h.error.load_nm}});
+                                        {"load_rms_Nm", h.error.load_nm}, {"refit_on_trajectory", h.refit_on_trajectory}});
         }
         if (!s.hypotheses.empty()) js["hypotheses_equivalent"] = s.equivalent;
         js["trajectory_cost_before"] = s.trajectory_before;
@@ -1240,6 +1244,57 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
         out.amp_text = amp.name + " = " + std::to_string(amp.value) + " +/- " + std::to_string(amp.std_error);
         return out;
     };
+    // Hypotheses are fitted on the torque residual and judged on the trajectory, which can be far more
+    // sensitive (a constant torque of 0.0055 N m moves the angle by 30 noise floors): a torque fit a
+    // little off costs several floors there. When the best two of different names are both above
+    // kHypothesisRefitAboveCost and within kHypothesisRefitRatio of each other, each is refitted on the
+    // trajectory (the health and its own parameters, kFinalRefitIterations) and judged by that cost.
+    // The model keeps the torque fit (the final refit on the trajectory comes later). Seed 163901: a
+    // constant torque of 0.0055 N m lost to "torque ~ t", 2.92 against 2.16, fitted on the torque.
+    auto refit_close_hypotheses_on_trajectory = [&](DiscoveryStep& st, const auto& fit_of, const auto& effect_of,
+                                                    const auto& terms_of) {
+        if (st.hypotheses.size() < 2) return;
+        std::vector<std::size_t> order(st.hypotheses.size());
+        for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+        std::stable_sort(order.begin(), order.end(),
+                         [&](std::size_t a, std::size_t b) { return st.hypotheses[a].cost < st.hypotheses[b].cost; });
+        const std::size_t a = order[0];
+        std::size_t b = order.size();
+        // A hypothesis with a wider margin to be told apart (the periodic twin) never replaces the
+        // choice on a close cost: no refit for it.
+        for (std::size_t k = 1; k < order.size(); ++k) {
+            if (st.hypotheses[order[k]].key != st.hypotheses[a].key && st.hypotheses[order[k]].tell_apart_ratio <= kHypothesisRatio &&
+                st.hypotheses[a].tell_apart_ratio <= kHypothesisRatio) {
+                b = order[k];
+                break;
+            }
+        }
+        if (b == order.size()) return;
+        const double lo = st.hypotheses[a].cost, hi = st.hypotheses[b].cost;
+        if (!(lo > kHypothesisRefitAboveCost && hi < kHypothesisRefitRatio * lo)) return;
+        for (std::size_t i : {a, b}) {
+            const FitResult& f = fit_of(i);
+            std::vector<std::string> names = health_names;
+            if (const std::optional<EffectShape> e = effect_of(i)) {
+                for (const auto& n : fitted_sim_effects(e->kind)) names.push_back(n);
+            }
+            const std::size_t n_terms = terms_of(i);
+            for (std::size_t k = f.params.terms.size() - n_terms; k < f.params.terms.size(); ++k) names.push_back(term_parameter(k));
+            try {
+                const FitResult r = fit_by_resimulation(run, s, f.params, names, mask, fsj_base_nm, kFitWindowSamples, nullptr,
+                                                        kFinalRefitIterations, &floor);
+                const TrajectoryError te = trajectory_error(s, r.signals, floor);
+                st.simulations += r.simulations;
+                if (te.cost < st.hypotheses[i].cost) {
+                    st.hypotheses[i].cost = te.cost;
+                    st.hypotheses[i].error = te;
+                    st.hypotheses[i].refit_on_trajectory = true;
+                }
+            } catch (const std::exception&) {
+                // Keeps its torque-fit cost.
+            }
+        }
+    };
     for (int round = 0; round < options.max_effects; ++round) {
         DiscoveryStep step;
         ScreenInput in;
@@ -1401,6 +1456,9 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
                 step.simulations += af.fit.simulations;
                 alt_fits.push_back(std::move(af));
             }
+            refit_close_hypotheses_on_trajectory(step, [&](std::size_t i) -> const FitResult& { return i == 0 ? fit : alt_fits[i - 1].fit; },
+                                                 [&](std::size_t i) -> std::optional<EffectShape> { return i == 0 ? step.added : alt_fits[i - 1].effect; },
+                                                 [&](std::size_t i) { return i == 0 ? step.added_terms.size() : alt_fits[i - 1].terms; });
             std::size_t best = 0;
             for (std::size_t i = 1; i < step.hypotheses.size(); ++i) {
                 if (step.hypotheses[i].cost < step.hypotheses[best].cost) best = i;

@@ -53,6 +53,7 @@ struct Hypothesis {
     TrajectoryError error;
     int simulations = 0;
     double tell_apart_ratio = kHypothesisRatio;  ///< cost ratio by which the trajectory tells it from the one found
+    bool refit_on_trajectory = false;  ///< cost after a refit on the trajectory (close hypotheses, discovery.cpp)
 };
 
 /// One round: the screening, and the effect it added (if any) with the error after it.
