@@ -1104,7 +1104,8 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
         throw EmadiagError("discovery: the " + run.sequence + " run has " + std::to_string(compared) +
                            " comparison samples (slipping in the run and the model); at least " +
                            std::to_string(kMinScreenSamples) +
-                           " are needed (a BRK run barely moves: use a DYN or sweep run)");
+                           " are needed (a BRK run barely moves: use a DYN or sweep run; given with a DYN run of the same actuator, "
+                           "a BRK run's breakaway thresholds are compared with the DYN run's model)");
     }
     rep.model.error_before = model_error(s, base_sim, mask);
     rep.model.error_after = rep.model.error_before;
