@@ -8,7 +8,9 @@
 // (resolution / sqrt 12). For the torque residual the same is done on the means of windows of
 // kScreenWindowSamples comparison samples.
 //
-// Significance: chi^2 = sum (e / sigma)^2 over the n values of a channel, z = (chi^2 - n) / sqrt(2n)
+// Significance: chi^2 = sum (e / sigma)^2 over the n values of a channel but its largest single value
+// (one glitch is not structure: a window across a kink once gave 17 floors on a clean run),
+// z = (chi^2 - n) / sqrt(2n)
 // (the normal approximation of the chi-square test). A channel is significantly above its floor when
 // z > kStructureMinZ and its RMS is at least kStructureMinExcess (torque window means) or
 // kStructureMinExcessTrajectory (current, speed, theta, load) times the floor. The trajectory channels
@@ -17,6 +19,7 @@
 // position error through the speed and position loops), so clean runs show 1.0 to 1.3 x the floor there.
 #include "discovery/run_signals.hpp"
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -64,7 +67,9 @@ struct StructureReport {
     std::string unit;
     double rms = 0, floor = 0;      ///< RMS of the residual, and the noise floor
     double chi2 = 0, z = 0;
-    std::size_t n = 0;
+    std::size_t n = 0;                  ///< values tested (the largest single one is left out)
+    std::optional<std::size_t> excluded_index;  ///< that value's index in y
+    double excluded_value = 0;
     bool significant = false;
     std::vector<Dependence> dependence;  ///< strongest first
     std::vector<double> x, y;            ///< the residual (y) against the strongest variable (x)
