@@ -29,6 +29,7 @@ struct Lanes {
     D j, dt_inv_j, viscous;
     // state
     D i, w, th, x[4];
+    D hinge_alpha;  // case B: kChAlphaPerRad * alpha_t, which changes with x only (hinge_alpha_of)
     D gap;  // backlash: motor angle minus load angle, within +/- backlash/2
     // BRK sequencer
     D phase, ramp_i, ramp_start_th, last_iref, hold_end_n;
@@ -101,6 +102,15 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     if (s.sequence == Sequence::Brk) {
         v_up = i_ref > i0;
         v_down = i_ref < i0;
+    } else if constexpr (W > 1) {
+        // The batched step is limited by its instruction count, not by this latency: I_ref itself
+        // (one max and one min) and two compares instead of six compares and four mask operations.
+        // The two forms differ only where y is NaN; y is NaN only where w is (th is NaN only where
+        // w is, every parameter is finite), and then I_base is NaN and every candidate below is
+        // that same NaN.
+        const D i_ref_c = vclamp(s.k_w * (w_ref - w0), -s.i_max, s.i_max);
+        v_up = i_ref_c > i0;
+        v_down = i_ref_c < i0;
     } else {
         // I_ref = clamp(y, +/-I_max) = min(max(y, -I_max), I_max) is compared with I without waiting
         // for the clamp: min(a, M) > I <=> a > I and M > I; max(y, -M) > I <=> y > I or -M > I
@@ -111,7 +121,14 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     }
     const D i_base = i0 - s.dt_over_l * (s.k_t * w0 + s.r * i0);
     const double di_v = s.dt_over_l * s.v_dc;
-    const D i1 = sel(v_up, i_base + di_v, sel(v_down, i_base - di_v, i_base + zero));
+    D i1;
+    if constexpr (W == 1) {
+        i1 = sel(v_up, i_base + di_v, sel(v_down, i_base - di_v, i_base + zero));
+    } else {
+        // The same sums with the increment selected first (one add instead of three; x - y is
+        // x + (-y) in IEEE arithmetic).
+        i1 = i_base + sel(v_up, zero + di_v, sel(v_down, zero - di_v, zero));
+    }
     z.i = i1;
     D t_m = vclamp(s.k_t * i1, -s.t_max, s.t_max);
 
@@ -120,12 +137,11 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     if constexpr (kFull) th_load = th_load - z.gap;
     D h;
     if (s.load_case == LoadCase::B) {
-        const D alpha_t = z.x[1] + z.x[3] * (detail::kTailArmM / detail::kAirspeedMS);
         const D delta_rad = th_load * s.inv_tau;
         // -(K x) written as (-K) x: the same double (rounding is symmetric in the sign), one sign flip
         // fewer on the step's critical path (theta -> F_R -> friction -> w -> theta).
         constexpr double kNegHingeGain = -(detail::kQbarPa * detail::kSeM2 * detail::kCeM);
-        h = kNegHingeGain * (detail::kChAlphaPerRad * alpha_t + detail::kChDeltaPerRad * delta_rad);
+        h = kNegHingeGain * (z.hinge_alpha + detail::kChDeltaPerRad * delta_rad);
     } else if (s.load_case == LoadCase::AExt) {
         h = zero + (detail::kCaseAHingeNm + detail::kAExtHingeRateNmPerS * t);
     } else {
@@ -201,8 +217,9 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         c = sel(opposing, z.c_opp, z.c_aid);
     } else {
         // The same choice in blends: fewer live masks (AVX-512 has 8 mask registers; K groups of
-        // masks spill to general registers) and no mask logic.
-        c = sel(d_pos, sel(f_r > 0.0, z.c_opp, z.c_aid), sel(f_r < 0.0, z.c_opp, z.c_aid));
+        // masks spill to general registers) and no mask logic. F_R d > 0 as (d_pos ? F_R : -F_R) > 0
+        // (-(-0) = +0 is not > 0, NaN is not): one compare and one blend fewer.
+        c = sel(sel(d_pos, f_r, -f_r) > 0.0, z.c_opp, z.c_aid);
     }
     const D c_fr = c * vabs(f_r);
     D dyn = z.fdj + c_fr;
@@ -294,6 +311,15 @@ inline void step(const detail::Shared& s, Lanes<W>& z, long n) {
     self::step<W, kFull>(s, z, n, s.tau * detail::deg2rad(detail::command_deg_inline(s.sequence, t)));
 }
 
+/// Case B: the part of the hinge moment's bracket that depends on the aircraft state only,
+/// kChAlphaPerRad * alpha_t with alpha_t = x[1] + x[3] l_t / V (section 4); kept in Lanes::hinge_alpha
+/// between aircraft updates (the same double the step would compute from x every step).
+template <int W>
+inline void update_hinge_alpha(Lanes<W>& z) {
+    const auto alpha_t = z.x[1] + z.x[3] * (detail::kTailArmM / detail::kAirspeedMS);
+    z.hinge_alpha = detail::kChAlphaPerRad * alpha_t;
+}
+
 /// Case B aircraft update every 1e-4 s (section 3 step 7), forward Euler, delta_e in degrees.
 template <int W, bool kFull>
 inline void aircraft_update(const detail::Shared& s, Lanes<W>& z) {
@@ -308,6 +334,7 @@ inline void aircraft_update(const detail::Shared& s, Lanes<W>& z) {
     }
     dx[3] = dx[3] + detail::kB3 * de;
     for (int r = 0; r < 4; ++r) z.x[r] = z.x[r] + kAircraftPeriodS * dx[r];
+    self::update_hinge_alpha(z);
 }
 
 /// Runs G interleaved groups of W lanes from rest to the end; lane l of group g fills out[g * W + l].
@@ -441,6 +468,7 @@ inline void run_group(const SimConfig* const* configs, SimResult* const* out) {
         z[g].fsj = self::from_array<D>(fsj);
         z[g].c_opp = self::from_array<D>(c_opp);
         z[g].c_aid = self::from_array<D>(c_aid);
+        self::update_hinge_alpha(z[g]);  // from the state at rest
     }
     bool full = false;
     bool truth = false;
