@@ -149,6 +149,18 @@ HWY_INLINE LaneVec<K> sel(LaneMask<K> m, LaneVec<K> a, LaneVec<K> b) {
     EMADIAG_EACH r.v[k] = hn::IfThenElse(m.m[k], a.v[k], b.v[k]);
     return r;
 }
+// sel(m, +0, a) and sel(m, a, +0): one and-not / and with the mask (GCC turned the blend with a zero
+// into a sign-bit compare and an and-not).
+template <int K>
+HWY_INLINE LaneVec<K> zero_if(LaneMask<K> m, LaneVec<K> a) {
+    EMADIAG_EACH a.v[k] = hn::IfThenZeroElse(m.m[k], a.v[k]);
+    return a;
+}
+template <int K>
+HWY_INLINE LaneVec<K> keep_if(LaneMask<K> m, LaneVec<K> a) {
+    EMADIAG_EACH a.v[k] = hn::IfThenElseZero(m.m[k], a.v[k]);
+    return a;
+}
 template <int K>
 HWY_INLINE LaneMask<K> vnot(LaneMask<K> m) {
     LaneMask<K> r;
@@ -189,6 +201,14 @@ HWY_INLINE LaneVec<K> clamp_above(LaneVec<K> a, double hi) { return sel(a > hi, 
 template <int K>
 HWY_INLINE void to_array(LaneVec<K> v, double* out) {
     EMADIAG_EACH hn::StoreU(v.v[k], DTag(), out + k * kLanes);
+}
+
+/// Every lane 0.0 + a: what D{} + a gives (K adds of zero and a broadcast), in one broadcast.
+template <class D>
+    requires(!std::is_same_v<D, double>)
+HWY_INLINE D bcast(double a) {
+    constexpr int K = static_cast<int>(sizeof(D::v) / sizeof(D::v[0]));
+    return splat<K>(0.0 + a);
 }
 
 // The scalar path (W = 1) compiled for this target too: plain double and bool as in step_kernel.hpp,

@@ -8,6 +8,12 @@ struct Vec<1> {
     using M = bool;
 };
 inline double sel(bool m, double a, double b) { return m ? a : b; }
+inline double zero_if(bool m, double a) { return m ? 0.0 : a; }
+inline double keep_if(bool m, double a) { return m ? a : 0.0; }
+template <class D>
+inline D bcast(double a) {
+    return 0.0 + a;
+}
 inline bool vnot(bool m) { return !m; }
 inline double vabs(double a) { return std::fabs(a); }
 inline void to_array(double v, double* out) { out[0] = v; }

@@ -7,6 +7,8 @@
 // each instruction set gets its own copy compiled for it. The enclosing namespace provides:
 //   Vec<W>::D, Vec<W>::M           the lane vector of doubles and its mask;
 //   sel(M, D, D), vnot(M), vabs(D) select, mask negation, |x| (sign bit cleared);
+//   zero_if(M, D), keep_if(M, D)   sel(m, +0, x) and sel(m, x, +0) (one and-not / and on SIMD);
+//   bcast<D>(double x)             every lane 0.0 + x (the value `D{} + x` gives, in one broadcast);
 //   to_array(D, double*), from_array<D>(const double*) -> D;
 //   namespace self                 an alias of the enclosing namespace (calls here are qualified,
 //                                  so argument-dependent lookup cannot pick another copy).
@@ -61,7 +63,7 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     const double dt = s.dt;
     const double t = static_cast<double>(n) * dt;  // section 7: step n runs at t = n dt
     const D zero{};
-    const D one = zero + 1.0;
+    const D one = self::bcast<D>(1.0);
 
     // BRK: entering a ramp at the start of this step (sections 5 and 7).
     D phase = z.phase;
@@ -72,11 +74,11 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         const M start_up = (phase == kPhaseHold0) & mask_of<M>(dn > static_cast<double>(s.brk_first_hold_steps));
         const M start_down = (phase == kPhaseHold1) & (z.hold_end_n < dn);
         const M start_ramp = start_up | start_down;
-        phase = sel(start_up, zero + kPhaseRampUp, sel(start_down, zero + kPhaseRampDown, phase));
+        phase = sel(start_up, self::bcast<D>(kPhaseRampUp), sel(start_down, self::bcast<D>(kPhaseRampDown), phase));
         z.ramp_i = sel(start_ramp, z.last_iref, z.ramp_i);
         z.ramp_start_th = sel(start_ramp, z.th, z.ramp_start_th);
         ramping = (phase == kPhaseRampUp) | (phase == kPhaseRampDown);
-        ramp_rate = sel(phase == kPhaseRampUp, zero + kBrkRampAPerS * dt, zero - kBrkRampAPerS * dt);
+        ramp_rate = sel(phase == kPhaseRampUp, self::bcast<D>(kBrkRampAPerS * dt), self::bcast<D>(0.0 - kBrkRampAPerS * dt));
     }
 
     // 1. Command: cmd_m (shared by all lanes).
@@ -127,7 +129,7 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     } else {
         // The same sums with the increment selected first (one add instead of three; x - y is
         // x + (-y) in IEEE arithmetic).
-        i1 = i_base + sel(v_up, zero + di_v, sel(v_down, zero - di_v, zero));
+        i1 = i_base + sel(v_up, self::bcast<D>(di_v), self::keep_if(v_down, self::bcast<D>(0.0 - di_v)));
     }
     z.i = i1;
     D t_m = vclamp(s.k_t * i1, -s.t_max, s.t_max);
@@ -143,9 +145,9 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         constexpr double kNegHingeGain = -(detail::kQbarPa * detail::kSeM2 * detail::kCeM);
         h = kNegHingeGain * (z.hinge_alpha + detail::kChDeltaPerRad * delta_rad);
     } else if (s.load_case == LoadCase::AExt) {
-        h = zero + (detail::kCaseAHingeNm + detail::kAExtHingeRateNmPerS * t);
+        h = self::bcast<D>(detail::kCaseAHingeNm + detail::kAExtHingeRateNmPerS * t);
     } else {
-        h = zero + detail::kCaseAHingeNm;
+        h = self::bcast<D>(detail::kCaseAHingeNm);
     }
     D f_r = h * s.inv_tau;
 
@@ -187,7 +189,7 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         viscous = z.viscous * w0;
         // Backlash: inside the free play the load and the transmission friction are not felt.
         if (s.fx.backlash_rad > 0.0) in_gap = vabs(z.gap) < 0.5 * s.fx.backlash_rad;
-        f_r = sel(in_gap, zero, f_r);
+        f_r = self::zero_if(in_gap, f_r);
     }
     // Terms as data (term_hook.hpp): an extra torque T_x, each lane its own terms, evaluated for all
     // lanes in one call that gives each lane the scalar path's value bit for bit.
@@ -204,7 +206,8 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
             t_x = self::from_array<D>(tx_a);
         }
     }
-    const D t_act = t_m - f_r - t_x;
+    D t_act = t_m - f_r;
+    if constexpr (kFull) t_act = t_act - t_x;  // without terms x - (+0) = x: the fast step skips it
     const M still = w0 == 0.0;
     const M moving = vnot(still);
     const M w_pos = w0 > 0.0;
@@ -225,8 +228,8 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     D dyn = z.fdj + c_fr;
     D stat = z.fsj + c_fr;
     if constexpr (kFull) {
-        dyn = sel(in_gap, zero, dyn + extra_dyn);
-        stat = sel(in_gap, zero, stat + extra_stat);
+        dyn = self::zero_if(in_gap, dyn + extra_dyn);
+        stat = self::zero_if(in_gap, stat + extra_stat);
     }
     const M stuck = still & (vabs(t_act) <= stat);
     D t_slip = sel(d_pos, dyn, -dyn);  // d * dyn: friction while slipping (or breaking away)
@@ -248,11 +251,11 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     D w1;
     if constexpr (W == 1) {
         const M to_zero = stuck | (w_pos & (w_free < 0.0)) | ((moving & vnot(w_pos)) & (w_free > 0.0));
-        w1 = sel(to_zero, zero, w_free);
+        w1 = self::zero_if(to_zero, w_free);
     } else {
         // sel(w_free < 0, 0, w_free) and sel(w_free > 0, 0, w_free): one max / min with +0 each.
         const D w_slip = sel(w_pos, self::clamp_below(w_free, 0.0), self::clamp_above(w_free, 0.0));
-        w1 = sel(still, sel(stuck, zero, w_free), w_slip);
+        w1 = sel(still, self::zero_if(stuck, w_free), w_slip);
     }
 
     // 6. Position and end stops.
@@ -266,11 +269,11 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         th1 = vclamp(th1, -s.stop_m, s.stop_m);
     }
     const D w_before_stop = w1;
-    w1 = sel(at_stop, zero, w1);
+    w1 = self::zero_if(at_stop, w1);
     if constexpr (kFull) {
         const double half = 0.5 * s.fx.backlash_rad;
         z.gap = vclamp(z.gap + (th1 - z.th), -half, half);
-        const D v = sel(v_up, zero + s.v_dc, sel(v_down, zero - s.v_dc, zero));
+        const D v = sel(v_up, self::bcast<D>(s.v_dc), self::keep_if(v_down, self::bcast<D>(0.0 - s.v_dc)));
         const D i_avg = 0.5 * (i0 + i1);
         z.e_in = z.e_in + v * i_avg * dt;
         z.e_cu = z.e_cu + s.r * i0 * i_avg * dt;
@@ -280,11 +283,11 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         z.e_sat = z.e_sat + (s.k_t * i1 - t_m) * w_avg * dt;
         // Kinetic energy removed by zeroing the speed (reversal stop and end stop).
         const D w_unclipped = sel(reversal_stop, w_free, w_before_stop);
-        z.e_stop = z.e_stop + sel(reversal_stop | at_stop, 0.5 * z.j * (w_unclipped * w_unclipped - w1 * w1), zero);
+        z.e_stop = z.e_stop + self::keep_if(reversal_stop | at_stop, 0.5 * z.j * (w_unclipped * w_unclipped - w1 * w1));
         z.sum_tf = z.sum_tf + t_f;
         z.sum_tm = z.sum_tm + t_m;
         z.sum_fr = z.sum_fr + f_r;
-        z.stuck_count = z.stuck_count + sel(stuck, one, zero);
+        z.stuck_count = z.stuck_count + self::keep_if(stuck, one);
     }
     z.th = th1;
     z.w = w1;
@@ -293,9 +296,9 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     if (s.sequence == Sequence::Brk) {
         const M moved = ramping & (vabs(th1 - z.ramp_start_th) >= kBrkMoveRad);
         const M up = phase == kPhaseRampUp;
-        z.hold_end_n = sel(moved & up, zero + (static_cast<double>(n) + static_cast<double>(s.brk_mid_hold_steps)),
+        z.hold_end_n = sel(moved & up, self::bcast<D>(static_cast<double>(n) + static_cast<double>(s.brk_mid_hold_steps)),
                            z.hold_end_n);
-        z.phase = sel(moved, sel(up, zero + kPhaseHold1, zero + kPhaseHold2), phase);
+        z.phase = sel(moved, sel(up, self::bcast<D>(kPhaseHold1), self::bcast<D>(kPhaseHold2)), phase);
     }
 
     // Period means (section 7): I after step 3, w after step 6, the H used in step 4.
