@@ -212,7 +212,12 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     const M moving = vnot(still);
     const M w_pos = w0 > 0.0;
     // Direction d = +1 where d_pos, else -1: sgn(w) while moving, sgn(T_act) (-1 at 0) while stuck.
-    const M d_pos = w_pos | (still & (t_act > 0.0));
+    M d_pos;
+    if constexpr (W == 1) {
+        d_pos = w_pos | (still & (t_act > 0.0));
+    } else {
+        d_pos = sel(still, t_act, w0) > 0.0;  // the same mask in a blend and a compare (one op and one mask fewer)
+    }
     // c_opp where F_R d > 0 (opposing: F_R > 0 for d = +1, F_R < 0 for d = -1), else c_aid.
     D c;
     if constexpr (W == 1) {
