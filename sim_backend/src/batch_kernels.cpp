@@ -162,6 +162,11 @@ HWY_INLINE LaneVec<K> keep_if(LaneMask<K> m, LaneVec<K> a) {
     return a;
 }
 template <int K>
+HWY_INLINE LaneVec<K> vxor(LaneVec<K> a, LaneVec<K> b) {  // bitwise: a ^ (-0) = -a, a ^ (+0) = a
+    EMADIAG_EACH a.v[k] = hn::Xor(a.v[k], b.v[k]);
+    return a;
+}
+template <int K>
 HWY_INLINE LaneMask<K> vnot(LaneMask<K> m) {
     LaneMask<K> r;
     EMADIAG_EACH r.m[k] = hn::Not(m.m[k]);

@@ -10,6 +10,9 @@ struct Vec<1> {
 inline double sel(bool m, double a, double b) { return m ? a : b; }
 inline double zero_if(bool m, double a) { return m ? 0.0 : a; }
 inline double keep_if(bool m, double a) { return m ? a : 0.0; }
+inline double vxor(double a, double b) {  // bitwise, as the vector step's Xor
+    return std::bit_cast<double>(std::bit_cast<std::uint64_t>(a) ^ std::bit_cast<std::uint64_t>(b));
+}
 template <class D>
 inline D bcast(double a) {
     return 0.0 + a;

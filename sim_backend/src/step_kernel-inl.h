@@ -213,10 +213,15 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     const M w_pos = w0 > 0.0;
     // Direction d = +1 where d_pos, else -1: sgn(w) while moving, sgn(T_act) (-1 at 0) while stuck.
     M d_pos;
+    D d_sign;  // vector step: -0 (the sign bit) where d = -1, +0 where d = +1
     if constexpr (W == 1) {
         d_pos = w_pos | (still & (t_act > 0.0));
     } else {
-        d_pos = sel(still, t_act, w0) > 0.0;  // the same mask in a blend and a compare (one op and one mask fewer)
+        // The same mask in a blend and a compare (one op and one mask fewer), kept as a sign bit:
+        // x d = x ^ d_sign (Neg flips the sign bit), so the mask dies here (AVX-512 has 8 mask
+        // registers for K groups' masks).
+        d_pos = sel(still, t_act, w0) > 0.0;
+        d_sign = self::zero_if(d_pos, -zero);
     }
     // c_opp where F_R d > 0 (opposing: F_R > 0 for d = +1, F_R < 0 for d = -1), else c_aid.
     D c;
@@ -227,7 +232,7 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         // The same choice in blends: fewer live masks (AVX-512 has 8 mask registers; K groups of
         // masks spill to general registers) and no mask logic. F_R d > 0 as (d_pos ? F_R : -F_R) > 0
         // (-(-0) = +0 is not > 0, NaN is not): one compare and one blend fewer.
-        c = sel(sel(d_pos, f_r, -f_r) > 0.0, z.c_opp, z.c_aid);
+        c = sel(self::vxor(f_r, d_sign) > 0.0, z.c_opp, z.c_aid);
     }
     const D c_fr = c * vabs(f_r);
     D dyn = z.fdj + c_fr;
@@ -237,7 +242,12 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         stat = self::zero_if(in_gap, stat + extra_stat);
     }
     const M stuck = still & (vabs(t_act) <= stat);
-    D t_slip = sel(d_pos, dyn, -dyn);  // d * dyn: friction while slipping (or breaking away)
+    D t_slip;  // d * dyn: friction while slipping (or breaking away)
+    if constexpr (W == 1) {
+        t_slip = sel(d_pos, dyn, -dyn);
+    } else {
+        t_slip = self::vxor(dyn, d_sign);
+    }
     if constexpr (kFull) t_slip = t_slip + viscous;
     const D t_f = sel(stuck, t_act, t_slip);
     // w + dt (T_act - T_F) / J while slipping, arranged so T_act enters last (critical path). J is
