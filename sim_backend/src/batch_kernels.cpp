@@ -197,7 +197,14 @@ HWY_INLINE LaneVec<K> clamp_above(LaneVec<K> a, double hi) {
     EMADIAG_EACH a.v[k] = hn::Min(h, a.v[k]);
     return a;
 }
+template <int K>
+HWY_INLINE LaneVec<K> vmax(LaneVec<K> lo, LaneVec<K> a) {  // clamp_below with a bound per lane
+    EMADIAG_EACH a.v[k] = hn::Max(lo.v[k], a.v[k]);
+    return a;
+}
 #else
+template <int K>
+HWY_INLINE LaneVec<K> vmax(LaneVec<K> lo, LaneVec<K> a) { return sel(a < lo, lo, a); }
 template <int K>
 HWY_INLINE LaneVec<K> clamp_below(LaneVec<K> a, double lo) { return sel(a < lo, splat<K>(lo), a); }
 template <int K>

@@ -21,4 +21,5 @@ inline bool vnot(bool m) { return !m; }
 inline double vabs(double a) { return std::fabs(a); }
 inline void to_array(double v, double* out) { out[0] = v; }
 inline double clamp_below(double a, double lo) { return a < lo ? lo : a; }
+inline double vmax(double lo, double a) { return a < lo ? lo : a; }  // clamp_below(a, lo), lo per lane
 inline double clamp_above(double a, double hi) { return a > hi ? hi : a; }

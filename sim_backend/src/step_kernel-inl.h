@@ -269,8 +269,11 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         w1 = self::zero_if(to_zero, w_free);
     } else {
         // sel(w_free < 0, 0, w_free) and sel(w_free > 0, 0, w_free): one max / min with +0 each.
-        const D w_slip = sel(w_pos, self::clamp_below(w_free, 0.0), self::clamp_above(w_free, 0.0));
-        w1 = sel(still, self::zero_if(stuck, w_free), w_slip);
+        // Moving, d_pos is w_pos (NaN w: both false), and min(+0, x) is -max(-0, -x) per lane (NaN and
+        // signed zeros included), so with d_sign = +0 / -0: w_slip = max(d_sign, w_free d) d, and
+        // neither w_pos nor stuck stays live as a mask (the static case tests |T_act| <= stat here).
+        const D w_slip = self::vxor(self::vmax(d_sign, self::vxor(w_free, d_sign)), d_sign);
+        w1 = sel(still, self::zero_if(vabs(t_act) <= stat, w_free), w_slip);
     }
 
     // 6. Position and end stops.
