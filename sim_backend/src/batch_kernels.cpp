@@ -23,6 +23,10 @@ inline constexpr int kLanes = static_cast<int>(HWY_LANES(double));
 /// interleaved operation by operation (LaneVec<K> below). Measured on Zen 5 (sim_bench, ns per
 /// simulation-step on one core): AVX-512 3.3 step by step with 3 groups, 2.5 interleaved with 3 or 4;
 /// AVX2 4.1 with 3, 3.7 with 4; SSE4 8.2 with 3, 8.4 with 4 (16 registers hold fewer copies).
+/// Zen 4, session 9, after the step lost a fifth of its operations (one core, min of 5 interleaved
+/// runs, K = 2 / 3 / 4 / 5 / 6): AVX-512 2.32 / 1.93 / 1.81 / 1.87 / 1.90; AVX2 3.65 / 2.58 / 2.41 /
+/// 17.2 / 11.3 (5 and 6 spill into code that runs 4x slower per instruction); SSE4 7.19 / 5.27 /
+/// 4.73 / 4.78 / 4.81: SSE4 now 4 too (10 % faster than 3 here).
 // EMADIAG_GROUPS_SSE4 / _AVX2 / _AVX512 override the count at compile time (to measure other counts).
 #if (HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL) && defined(EMADIAG_GROUPS_AVX512)
 inline constexpr int kGroups = EMADIAG_GROUPS_AVX512;
@@ -30,7 +34,7 @@ inline constexpr int kGroups = EMADIAG_GROUPS_AVX512;
 inline constexpr int kGroups = EMADIAG_GROUPS_AVX2;
 #elif HWY_TARGET == HWY_SSE4 && defined(EMADIAG_GROUPS_SSE4)
 inline constexpr int kGroups = EMADIAG_GROUPS_SSE4;
-#elif HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL || HWY_TARGET == HWY_AVX2
+#elif HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL || HWY_TARGET == HWY_AVX2 || HWY_TARGET == HWY_SSE4
 inline constexpr int kGroups = 4;
 #else
 inline constexpr int kGroups = 3;
