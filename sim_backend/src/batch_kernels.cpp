@@ -171,6 +171,12 @@ HWY_INLINE LaneVec<K> vxor(LaneVec<K> a, LaneVec<K> b) {  // bitwise: a ^ (-0) =
     return a;
 }
 template <int K>
+HWY_INLINE bool any(LaneMask<K> m) {  // some lane of the K vectors set: one test of their union
+    auto u = m.m[0];
+    _Pragma("GCC unroll 8") for (int k = 1; k < K; ++k) u = hn::Or(u, m.m[k]);
+    return !hn::AllFalse(DTag(), u);
+}
+template <int K>
 HWY_INLINE LaneMask<K> vnot(LaneMask<K> m) {
     LaneMask<K> r;
     EMADIAG_EACH r.m[k] = hn::Not(m.m[k]);

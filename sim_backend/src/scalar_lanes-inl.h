@@ -18,6 +18,7 @@ inline D bcast(double a) {
     return 0.0 + a;
 }
 inline bool vnot(bool m) { return !m; }
+inline bool any(bool m) { return m; }
 inline double vabs(double a) { return std::fabs(a); }
 inline void to_array(double v, double* out) { out[0] = v; }
 inline double clamp_below(double a, double lo) { return a < lo ? lo : a; }

@@ -9,6 +9,7 @@
 //   sel(M, D, D), vnot(M), vabs(D) select, mask negation, |x| (sign bit cleared);
 //   zero_if(M, D), keep_if(M, D)   sel(m, +0, x) and sel(m, x, +0) (one and-not / and on SIMD);
 //   bcast<D>(double x)             every lane 0.0 + x (the value `D{} + x` gives, in one broadcast);
+//   any(M)                         whether some lane's mask is set;
 //   to_array(D, double*), from_array<D>(const double*) -> D;
 //   namespace self                 an alias of the enclosing namespace (calls here are qualified,
 //                                  so argument-dependent lookup cannot pick another copy).
@@ -273,7 +274,9 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         // signed zeros included), so with d_sign = +0 / -0: w_slip = max(d_sign, w_free d) d, and
         // neither w_pos nor stuck stays live as a mask (the static case tests |T_act| <= stat here).
         const D w_slip = self::vxor(self::vmax(d_sign, self::vxor(w_free, d_sign)), d_sign);
-        w1 = sel(still, self::zero_if(vabs(t_act) <= stat, w_free), w_slip);
+        // Most steps have every lane of a group moving: the static lanes' selects only when one is.
+        w1 = w_slip;
+        if (self::any(still)) w1 = sel(still, self::zero_if(vabs(t_act) <= stat, w_free), w_slip);
     }
 
     // 6. Position and end stops.
@@ -283,11 +286,14 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         // Within the stops the clamp gives theta back unchanged (NaN too): the scalar step branches
         // around it (rarely taken), so its max and min leave the step's critical path.
         if (at_stop) [[unlikely]] th1 = vclamp(th1, -s.stop_m, s.stop_m);
-    } else {
-        th1 = vclamp(th1, -s.stop_m, s.stop_m);
     }
     const D w_before_stop = w1;
-    w1 = self::zero_if(at_stop, w1);
+    if constexpr (W == 1) {
+        w1 = self::zero_if(at_stop, w1);
+    } else if (self::any(at_stop)) [[unlikely]] {  // the group's lanes within the stops keep theta and w
+        th1 = vclamp(th1, -s.stop_m, s.stop_m);
+        w1 = self::zero_if(at_stop, w1);
+    }
     if constexpr (kFull) {
         const double half = 0.5 * s.fx.backlash_rad;
         z.gap = vclamp(z.gap + (th1 - z.th), -half, half);
