@@ -10,6 +10,7 @@
 //   zero_if(M, D), keep_if(M, D)   sel(m, +0, x) and sel(m, x, +0) (one and-not / and on SIMD);
 //   bcast<D>(double x)             every lane 0.0 + x (the value `D{} + x` gives, in one broadcast);
 //   any(M)                         whether some lane's mask is set;
+//   vxor(D, D), vmax(D lo, D a)    bitwise xor (a sign flip with -0); maxpd(lo, a), as clamp_below;
 //   to_array(D, double*), from_array<D>(const double*) -> D;
 //   namespace self                 an alias of the enclosing namespace (calls here are qualified,
 //                                  so argument-dependent lookup cannot pick another copy).
