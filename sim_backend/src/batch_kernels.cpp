@@ -23,7 +23,18 @@ inline constexpr int kLanes = static_cast<int>(HWY_LANES(double));
 /// interleaved operation by operation (LaneVec<K> below). Measured on Zen 5 (sim_bench, ns per
 /// simulation-step on one core): AVX-512 3.3 step by step with 3 groups, 2.5 interleaved with 3 or 4;
 /// AVX2 4.1 with 3, 3.7 with 4; SSE4 8.2 with 3, 8.4 with 4 (16 registers hold fewer copies).
-#if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL || HWY_TARGET == HWY_AVX2
+/// Zen 4, session 9, after the step lost a fifth of its operations (one core, min of 5 interleaved
+/// runs, K = 2 / 3 / 4 / 5 / 6): AVX-512 2.32 / 1.93 / 1.81 / 1.87 / 1.90; AVX2 3.65 / 2.58 / 2.41 /
+/// 17.2 / 11.3 (5 and 6 spill into code that runs 4x slower per instruction); SSE4 7.19 / 5.27 /
+/// 4.73 / 4.78 / 4.81: SSE4 now 4 too (10 % faster than 3 here).
+// EMADIAG_GROUPS_SSE4 / _AVX2 / _AVX512 override the count at compile time (to measure other counts).
+#if (HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL) && defined(EMADIAG_GROUPS_AVX512)
+inline constexpr int kGroups = EMADIAG_GROUPS_AVX512;
+#elif HWY_TARGET == HWY_AVX2 && defined(EMADIAG_GROUPS_AVX2)
+inline constexpr int kGroups = EMADIAG_GROUPS_AVX2;
+#elif HWY_TARGET == HWY_SSE4 && defined(EMADIAG_GROUPS_SSE4)
+inline constexpr int kGroups = EMADIAG_GROUPS_SSE4;
+#elif HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL || HWY_TARGET == HWY_AVX2 || HWY_TARGET == HWY_SSE4
 inline constexpr int kGroups = 4;
 #else
 inline constexpr int kGroups = 3;
@@ -40,11 +51,24 @@ inline constexpr int kGroups = 3;
 template <int K>
 struct LaneMask {
     LaneMask() { EMADIAG_EACH m[k] = hn::MaskFromVec(hn::Zero(DTag())); }  // all false
+    LaneMask(const LaneMask&) = default;
+    LaneMask& operator=(const LaneMask& o) {
+        EMADIAG_EACH m[k] = o.m[k];
+        return *this;
+    }
     hn::Mask<DTag> m[K];
 };
+// The copy assignment is written out vector by vector: GCC 12's implicit one stored a LaneVec
+// member of Lanes (z.i = i1) through the stack and general registers (vmovq, vpinsrq, 16-byte
+// stores): 557 -> 525 instructions per AVX2 step of 16 lanes (callgrind), 8 % less time.
 template <int K>
 struct LaneVec {
     LaneVec() { EMADIAG_EACH v[k] = hn::Zero(DTag()); }
+    LaneVec(const LaneVec&) = default;
+    LaneVec& operator=(const LaneVec& o) {
+        EMADIAG_EACH v[k] = o.v[k];
+        return *this;
+    }
     hn::Vec<DTag> v[K];
 };
 template <int K, class F>
@@ -129,6 +153,29 @@ HWY_INLINE LaneVec<K> sel(LaneMask<K> m, LaneVec<K> a, LaneVec<K> b) {
     EMADIAG_EACH r.v[k] = hn::IfThenElse(m.m[k], a.v[k], b.v[k]);
     return r;
 }
+// sel(m, +0, a) and sel(m, a, +0): one and-not / and with the mask (GCC turned the blend with a zero
+// into a sign-bit compare and an and-not).
+template <int K>
+HWY_INLINE LaneVec<K> zero_if(LaneMask<K> m, LaneVec<K> a) {
+    EMADIAG_EACH a.v[k] = hn::IfThenZeroElse(m.m[k], a.v[k]);
+    return a;
+}
+template <int K>
+HWY_INLINE LaneVec<K> keep_if(LaneMask<K> m, LaneVec<K> a) {
+    EMADIAG_EACH a.v[k] = hn::IfThenElseZero(m.m[k], a.v[k]);
+    return a;
+}
+template <int K>
+HWY_INLINE LaneVec<K> vxor(LaneVec<K> a, LaneVec<K> b) {  // bitwise: a ^ (-0) = -a, a ^ (+0) = a
+    EMADIAG_EACH a.v[k] = hn::Xor(a.v[k], b.v[k]);
+    return a;
+}
+template <int K>
+HWY_INLINE bool any(LaneMask<K> m) {  // some lane of the K vectors set: one test of their union
+    auto u = m.m[0];
+    _Pragma("GCC unroll 8") for (int k = 1; k < K; ++k) u = hn::Or(u, m.m[k]);
+    return !hn::AllFalse(DTag(), u);
+}
 template <int K>
 HWY_INLINE LaneMask<K> vnot(LaneMask<K> m) {
     LaneMask<K> r;
@@ -160,7 +207,14 @@ HWY_INLINE LaneVec<K> clamp_above(LaneVec<K> a, double hi) {
     EMADIAG_EACH a.v[k] = hn::Min(h, a.v[k]);
     return a;
 }
+template <int K>
+HWY_INLINE LaneVec<K> vmax(LaneVec<K> lo, LaneVec<K> a) {  // clamp_below with a bound per lane
+    EMADIAG_EACH a.v[k] = hn::Max(lo.v[k], a.v[k]);
+    return a;
+}
 #else
+template <int K>
+HWY_INLINE LaneVec<K> vmax(LaneVec<K> lo, LaneVec<K> a) { return sel(a < lo, lo, a); }
 template <int K>
 HWY_INLINE LaneVec<K> clamp_below(LaneVec<K> a, double lo) { return sel(a < lo, splat<K>(lo), a); }
 template <int K>
@@ -169,6 +223,14 @@ HWY_INLINE LaneVec<K> clamp_above(LaneVec<K> a, double hi) { return sel(a > hi, 
 template <int K>
 HWY_INLINE void to_array(LaneVec<K> v, double* out) {
     EMADIAG_EACH hn::StoreU(v.v[k], DTag(), out + k * kLanes);
+}
+
+/// Every lane 0.0 + a: what D{} + a gives (K adds of zero and a broadcast), in one broadcast.
+template <class D>
+    requires(!std::is_same_v<D, double>)
+HWY_INLINE D bcast(double a) {
+    constexpr int K = static_cast<int>(sizeof(D::v) / sizeof(D::v[0]));
+    return splat<K>(0.0 + a);
 }
 
 // The scalar path (W = 1) compiled for this target too: plain double and bool as in step_kernel.hpp,

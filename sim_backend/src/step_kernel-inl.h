@@ -7,6 +7,10 @@
 // each instruction set gets its own copy compiled for it. The enclosing namespace provides:
 //   Vec<W>::D, Vec<W>::M           the lane vector of doubles and its mask;
 //   sel(M, D, D), vnot(M), vabs(D) select, mask negation, |x| (sign bit cleared);
+//   zero_if(M, D), keep_if(M, D)   sel(m, +0, x) and sel(m, x, +0) (one and-not / and on SIMD);
+//   bcast<D>(double x)             every lane 0.0 + x (the value `D{} + x` gives, in one broadcast);
+//   any(M)                         whether some lane's mask is set;
+//   vxor(D, D), vmax(D lo, D a)    bitwise xor (a sign flip with -0); maxpd(lo, a), as clamp_below;
 //   to_array(D, double*), from_array<D>(const double*) -> D;
 //   namespace self                 an alias of the enclosing namespace (calls here are qualified,
 //                                  so argument-dependent lookup cannot pick another copy).
@@ -29,6 +33,7 @@ struct Lanes {
     D j, dt_inv_j, viscous;
     // state
     D i, w, th, x[4];
+    D hinge_alpha;  // case B: kChAlphaPerRad * alpha_t, which changes with x only (hinge_alpha_of)
     D gap;  // backlash: motor angle minus load angle, within +/- backlash/2
     // BRK sequencer
     D phase, ramp_i, ramp_start_th, last_iref, hold_end_n;
@@ -60,7 +65,7 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     const double dt = s.dt;
     const double t = static_cast<double>(n) * dt;  // section 7: step n runs at t = n dt
     const D zero{};
-    const D one = zero + 1.0;
+    const D one = self::bcast<D>(1.0);
 
     // BRK: entering a ramp at the start of this step (sections 5 and 7).
     D phase = z.phase;
@@ -71,11 +76,11 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         const M start_up = (phase == kPhaseHold0) & mask_of<M>(dn > static_cast<double>(s.brk_first_hold_steps));
         const M start_down = (phase == kPhaseHold1) & (z.hold_end_n < dn);
         const M start_ramp = start_up | start_down;
-        phase = sel(start_up, zero + kPhaseRampUp, sel(start_down, zero + kPhaseRampDown, phase));
+        phase = sel(start_up, self::bcast<D>(kPhaseRampUp), sel(start_down, self::bcast<D>(kPhaseRampDown), phase));
         z.ramp_i = sel(start_ramp, z.last_iref, z.ramp_i);
         z.ramp_start_th = sel(start_ramp, z.th, z.ramp_start_th);
         ramping = (phase == kPhaseRampUp) | (phase == kPhaseRampDown);
-        ramp_rate = sel(phase == kPhaseRampUp, zero + kBrkRampAPerS * dt, zero - kBrkRampAPerS * dt);
+        ramp_rate = sel(phase == kPhaseRampUp, self::bcast<D>(kBrkRampAPerS * dt), self::bcast<D>(0.0 - kBrkRampAPerS * dt));
     }
 
     // 1. Command: cmd_m (shared by all lanes).
@@ -101,6 +106,15 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     if (s.sequence == Sequence::Brk) {
         v_up = i_ref > i0;
         v_down = i_ref < i0;
+    } else if constexpr (W > 1) {
+        // The batched step is limited by its instruction count, not by this latency: I_ref itself
+        // (one max and one min) and two compares instead of six compares and four mask operations.
+        // The two forms differ only where y is NaN; y is NaN only where w is (th is NaN only where
+        // w is, every parameter is finite), and then I_base is NaN and every candidate below is
+        // that same NaN.
+        const D i_ref_c = vclamp(s.k_w * (w_ref - w0), -s.i_max, s.i_max);
+        v_up = i_ref_c > i0;
+        v_down = i_ref_c < i0;
     } else {
         // I_ref = clamp(y, +/-I_max) = min(max(y, -I_max), I_max) is compared with I without waiting
         // for the clamp: min(a, M) > I <=> a > I and M > I; max(y, -M) > I <=> y > I or -M > I
@@ -111,7 +125,14 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     }
     const D i_base = i0 - s.dt_over_l * (s.k_t * w0 + s.r * i0);
     const double di_v = s.dt_over_l * s.v_dc;
-    const D i1 = sel(v_up, i_base + di_v, sel(v_down, i_base - di_v, i_base + zero));
+    D i1;
+    if constexpr (W == 1) {
+        i1 = sel(v_up, i_base + di_v, sel(v_down, i_base - di_v, i_base + zero));
+    } else {
+        // The same sums with the increment selected first (one add instead of three; x - y is
+        // x + (-y) in IEEE arithmetic).
+        i1 = i_base + sel(v_up, self::bcast<D>(di_v), self::keep_if(v_down, self::bcast<D>(0.0 - di_v)));
+    }
     z.i = i1;
     D t_m = vclamp(s.k_t * i1, -s.t_max, s.t_max);
 
@@ -120,16 +141,15 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     if constexpr (kFull) th_load = th_load - z.gap;
     D h;
     if (s.load_case == LoadCase::B) {
-        const D alpha_t = z.x[1] + z.x[3] * (detail::kTailArmM / detail::kAirspeedMS);
         const D delta_rad = th_load * s.inv_tau;
         // -(K x) written as (-K) x: the same double (rounding is symmetric in the sign), one sign flip
         // fewer on the step's critical path (theta -> F_R -> friction -> w -> theta).
         constexpr double kNegHingeGain = -(detail::kQbarPa * detail::kSeM2 * detail::kCeM);
-        h = kNegHingeGain * (detail::kChAlphaPerRad * alpha_t + detail::kChDeltaPerRad * delta_rad);
+        h = kNegHingeGain * (z.hinge_alpha + detail::kChDeltaPerRad * delta_rad);
     } else if (s.load_case == LoadCase::AExt) {
-        h = zero + (detail::kCaseAHingeNm + detail::kAExtHingeRateNmPerS * t);
+        h = self::bcast<D>(detail::kCaseAHingeNm + detail::kAExtHingeRateNmPerS * t);
     } else {
-        h = zero + detail::kCaseAHingeNm;
+        h = self::bcast<D>(detail::kCaseAHingeNm);
     }
     D f_r = h * s.inv_tau;
 
@@ -171,7 +191,7 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         viscous = z.viscous * w0;
         // Backlash: inside the free play the load and the transmission friction are not felt.
         if (s.fx.backlash_rad > 0.0) in_gap = vabs(z.gap) < 0.5 * s.fx.backlash_rad;
-        f_r = sel(in_gap, zero, f_r);
+        f_r = self::zero_if(in_gap, f_r);
     }
     // Terms as data (term_hook.hpp): an extra torque T_x, each lane its own terms, evaluated for all
     // lanes in one call that gives each lane the scalar path's value bit for bit.
@@ -188,12 +208,23 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
             t_x = self::from_array<D>(tx_a);
         }
     }
-    const D t_act = t_m - f_r - t_x;
+    D t_act = t_m - f_r;
+    if constexpr (kFull) t_act = t_act - t_x;  // without terms x - (+0) = x: the fast step skips it
     const M still = w0 == 0.0;
     const M moving = vnot(still);
     const M w_pos = w0 > 0.0;
     // Direction d = +1 where d_pos, else -1: sgn(w) while moving, sgn(T_act) (-1 at 0) while stuck.
-    const M d_pos = w_pos | (still & (t_act > 0.0));
+    M d_pos;
+    D d_sign;  // vector step: -0 (the sign bit) where d = -1, +0 where d = +1
+    if constexpr (W == 1) {
+        d_pos = w_pos | (still & (t_act > 0.0));
+    } else {
+        // The same mask in a blend and a compare (one op and one mask fewer), kept as a sign bit:
+        // x d = x ^ d_sign (Neg flips the sign bit), so the mask dies here (AVX-512 has 8 mask
+        // registers for K groups' masks).
+        d_pos = sel(still, t_act, w0) > 0.0;
+        d_sign = self::zero_if(d_pos, -zero);
+    }
     // c_opp where F_R d > 0 (opposing: F_R > 0 for d = +1, F_R < 0 for d = -1), else c_aid.
     D c;
     if constexpr (W == 1) {
@@ -201,18 +232,24 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         c = sel(opposing, z.c_opp, z.c_aid);
     } else {
         // The same choice in blends: fewer live masks (AVX-512 has 8 mask registers; K groups of
-        // masks spill to general registers) and no mask logic.
-        c = sel(d_pos, sel(f_r > 0.0, z.c_opp, z.c_aid), sel(f_r < 0.0, z.c_opp, z.c_aid));
+        // masks spill to general registers) and no mask logic. F_R d > 0 as (d_pos ? F_R : -F_R) > 0
+        // (-(-0) = +0 is not > 0, NaN is not): one compare and one blend fewer.
+        c = sel(self::vxor(f_r, d_sign) > 0.0, z.c_opp, z.c_aid);
     }
     const D c_fr = c * vabs(f_r);
     D dyn = z.fdj + c_fr;
     D stat = z.fsj + c_fr;
     if constexpr (kFull) {
-        dyn = sel(in_gap, zero, dyn + extra_dyn);
-        stat = sel(in_gap, zero, stat + extra_stat);
+        dyn = self::zero_if(in_gap, dyn + extra_dyn);
+        stat = self::zero_if(in_gap, stat + extra_stat);
     }
     const M stuck = still & (vabs(t_act) <= stat);
-    D t_slip = sel(d_pos, dyn, -dyn);  // d * dyn: friction while slipping (or breaking away)
+    D t_slip;  // d * dyn: friction while slipping (or breaking away)
+    if constexpr (W == 1) {
+        t_slip = sel(d_pos, dyn, -dyn);
+    } else {
+        t_slip = self::vxor(dyn, d_sign);
+    }
     if constexpr (kFull) t_slip = t_slip + viscous;
     const D t_f = sel(stuck, t_act, t_slip);
     // w + dt (T_act - T_F) / J while slipping, arranged so T_act enters last (critical path). J is
@@ -231,11 +268,16 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     D w1;
     if constexpr (W == 1) {
         const M to_zero = stuck | (w_pos & (w_free < 0.0)) | ((moving & vnot(w_pos)) & (w_free > 0.0));
-        w1 = sel(to_zero, zero, w_free);
+        w1 = self::zero_if(to_zero, w_free);
     } else {
         // sel(w_free < 0, 0, w_free) and sel(w_free > 0, 0, w_free): one max / min with +0 each.
-        const D w_slip = sel(w_pos, self::clamp_below(w_free, 0.0), self::clamp_above(w_free, 0.0));
-        w1 = sel(still, sel(stuck, zero, w_free), w_slip);
+        // Moving, d_pos is w_pos (NaN w: both false), and min(+0, x) is -max(-0, -x) per lane (NaN and
+        // signed zeros included), so with d_sign = +0 / -0: w_slip = max(d_sign, w_free d) d, and
+        // neither w_pos nor stuck stays live as a mask (the static case tests |T_act| <= stat here).
+        const D w_slip = self::vxor(self::vmax(d_sign, self::vxor(w_free, d_sign)), d_sign);
+        // Most steps have every lane of a group moving: the static lanes' selects only when one is.
+        w1 = w_slip;
+        if (self::any(still)) w1 = sel(still, self::zero_if(vabs(t_act) <= stat, w_free), w_slip);
     }
 
     // 6. Position and end stops.
@@ -245,15 +287,18 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         // Within the stops the clamp gives theta back unchanged (NaN too): the scalar step branches
         // around it (rarely taken), so its max and min leave the step's critical path.
         if (at_stop) [[unlikely]] th1 = vclamp(th1, -s.stop_m, s.stop_m);
-    } else {
-        th1 = vclamp(th1, -s.stop_m, s.stop_m);
     }
     const D w_before_stop = w1;
-    w1 = sel(at_stop, zero, w1);
+    if constexpr (W == 1) {
+        w1 = self::zero_if(at_stop, w1);
+    } else if (self::any(at_stop)) [[unlikely]] {  // the group's lanes within the stops keep theta and w
+        th1 = vclamp(th1, -s.stop_m, s.stop_m);
+        w1 = self::zero_if(at_stop, w1);
+    }
     if constexpr (kFull) {
         const double half = 0.5 * s.fx.backlash_rad;
         z.gap = vclamp(z.gap + (th1 - z.th), -half, half);
-        const D v = sel(v_up, zero + s.v_dc, sel(v_down, zero - s.v_dc, zero));
+        const D v = sel(v_up, self::bcast<D>(s.v_dc), self::keep_if(v_down, self::bcast<D>(0.0 - s.v_dc)));
         const D i_avg = 0.5 * (i0 + i1);
         z.e_in = z.e_in + v * i_avg * dt;
         z.e_cu = z.e_cu + s.r * i0 * i_avg * dt;
@@ -263,11 +308,11 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         z.e_sat = z.e_sat + (s.k_t * i1 - t_m) * w_avg * dt;
         // Kinetic energy removed by zeroing the speed (reversal stop and end stop).
         const D w_unclipped = sel(reversal_stop, w_free, w_before_stop);
-        z.e_stop = z.e_stop + sel(reversal_stop | at_stop, 0.5 * z.j * (w_unclipped * w_unclipped - w1 * w1), zero);
+        z.e_stop = z.e_stop + self::keep_if(reversal_stop | at_stop, 0.5 * z.j * (w_unclipped * w_unclipped - w1 * w1));
         z.sum_tf = z.sum_tf + t_f;
         z.sum_tm = z.sum_tm + t_m;
         z.sum_fr = z.sum_fr + f_r;
-        z.stuck_count = z.stuck_count + sel(stuck, one, zero);
+        z.stuck_count = z.stuck_count + self::keep_if(stuck, one);
     }
     z.th = th1;
     z.w = w1;
@@ -276,9 +321,9 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     if (s.sequence == Sequence::Brk) {
         const M moved = ramping & (vabs(th1 - z.ramp_start_th) >= kBrkMoveRad);
         const M up = phase == kPhaseRampUp;
-        z.hold_end_n = sel(moved & up, zero + (static_cast<double>(n) + static_cast<double>(s.brk_mid_hold_steps)),
+        z.hold_end_n = sel(moved & up, self::bcast<D>(static_cast<double>(n) + static_cast<double>(s.brk_mid_hold_steps)),
                            z.hold_end_n);
-        z.phase = sel(moved, sel(up, zero + kPhaseHold1, zero + kPhaseHold2), phase);
+        z.phase = sel(moved, sel(up, self::bcast<D>(kPhaseHold1), self::bcast<D>(kPhaseHold2)), phase);
     }
 
     // Period means (section 7): I after step 3, w after step 6, the H used in step 4.
@@ -292,6 +337,15 @@ template <int W, bool kFull>
 inline void step(const detail::Shared& s, Lanes<W>& z, long n) {
     const double t = static_cast<double>(n) * s.dt;  // section 7: step n runs at t = n dt
     self::step<W, kFull>(s, z, n, s.tau * detail::deg2rad(detail::command_deg_inline(s.sequence, t)));
+}
+
+/// Case B: the part of the hinge moment's bracket that depends on the aircraft state only,
+/// kChAlphaPerRad * alpha_t with alpha_t = x[1] + x[3] l_t / V (section 4); kept in Lanes::hinge_alpha
+/// between aircraft updates (the same double the step would compute from x every step).
+template <int W>
+inline void update_hinge_alpha(Lanes<W>& z) {
+    const auto alpha_t = z.x[1] + z.x[3] * (detail::kTailArmM / detail::kAirspeedMS);
+    z.hinge_alpha = detail::kChAlphaPerRad * alpha_t;
 }
 
 /// Case B aircraft update every 1e-4 s (section 3 step 7), forward Euler, delta_e in degrees.
@@ -308,6 +362,7 @@ inline void aircraft_update(const detail::Shared& s, Lanes<W>& z) {
     }
     dx[3] = dx[3] + detail::kB3 * de;
     for (int r = 0; r < 4; ++r) z.x[r] = z.x[r] + kAircraftPeriodS * dx[r];
+    self::update_hinge_alpha(z);
 }
 
 /// Runs G interleaved groups of W lanes from rest to the end; lane l of group g fills out[g * W + l].
@@ -441,6 +496,7 @@ inline void run_group(const SimConfig* const* configs, SimResult* const* out) {
         z[g].fsj = self::from_array<D>(fsj);
         z[g].c_opp = self::from_array<D>(c_opp);
         z[g].c_aid = self::from_array<D>(c_aid);
+        self::update_hinge_alpha(z[g]);  // from the state at rest
     }
     bool full = false;
     bool truth = false;

@@ -7,6 +7,8 @@
 #include "term_hook.hpp"
 
 #include <algorithm>
+#include <bit>
+#include <cstdint>
 #include <cmath>
 #include <numbers>
 #include <memory>

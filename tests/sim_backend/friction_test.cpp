@@ -81,6 +81,7 @@ TEST_P(FrictionLoadSign, ChoosesOpposingOrAidingEfficiency) {
     const auto& p = GetParam();
     OneStep e(LoadCase::B, Sequence::Dyn);
     e.z.x[1] = p.alpha_rad;
+    detail::update_hinge_alpha(e.z);  // the step reads case B's alpha term from Lanes, kept as x changes
     e.z.w = p.speed_rad_s;
     e.z.i = 0.0;
     const double t_f = e.run();
