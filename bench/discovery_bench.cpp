@@ -299,11 +299,25 @@ void run_load_pairs(int runs, int clean_runs, std::mt19937_64& g, std::uint64_t&
 }  // namespace
 
 int main(int argc, char** argv) {
-    const int runs = argc > 1 ? std::stoi(argv[1]) : 1;
-    const std::uint64_t seed = argc > 2 ? std::stoull(argv[2]) : 11;
+    const char* usage =
+        "usage: discovery_bench [runs_per_case=1] [seed=11] [noise=typical|none] "
+        "[sets=library,dev,heldout,clean (also dynbrk, loads)] [clean_runs=10] [plot_dir=]\n";
+    if (argc > 1 && (std::string(argv[1]) == "-h" || std::string(argv[1]) == "--help")) {
+        std::fputs(usage, stdout);
+        return 0;
+    }
+    int runs = 1, clean_runs = 10;
+    std::uint64_t seed = 11;
+    try {
+        if (argc > 1) runs = std::stoi(argv[1]);
+        if (argc > 2) seed = std::stoull(argv[2]);
+        if (argc > 5) clean_runs = std::stoi(argv[5]);
+    } catch (const std::exception&) {
+        std::fprintf(stderr, "discovery_bench: runs_per_case, seed and clean_runs are whole numbers\n%s", usage);
+        return 2;
+    }
     const std::string noise = argc > 3 ? argv[3] : "typical";
     const std::string sets = argc > 4 ? argv[4] : "library,dev,heldout,clean";
-    const int clean_runs = argc > 5 ? std::stoi(argv[5]) : 10;
     const std::string plot_dir = argc > 6 ? argv[6] : "";
     std::printf("discovery_bench: %d run(s) per case, seed %llu, noise %s, sets %s, %d clean runs; DYN case B 0.5 s\n",
                 runs, static_cast<unsigned long long>(seed), noise.c_str(), sets.c_str(), clean_runs);
