@@ -130,6 +130,20 @@ void run_pairs(int runs, int clean_runs, std::mt19937_64& g, std::uint64_t& run_
     std::printf("%-26s %-28s | %-40s %-7s | %-24s | %-7s | %-15s | %-15s | %s\n", "case", "injected", "named at rest", "verdict",
                 "size found (se)", "BRK z", "DYN cost mdl/with", "FDJ N m bef/aft", "time s");
     std::map<std::string, int> verdicts;
+    // A DYN and a BRK run of one actuator in case B with the term (none when empty), own noise seeds.
+    auto make_pair = [&](const std::string& term) {
+        emadiag::sim::SimConfig dyn, brk;
+        dyn.load_case = brk.load_case = emadiag::sim::LoadCase::B;
+        dyn.sequence = emadiag::sim::Sequence::Dyn;
+        brk.sequence = emadiag::sim::Sequence::Brk;
+        dyn.noise = brk.noise = noise;
+        dyn.seed = ++run_seed;
+        brk.seed = ++run_seed;
+        if (!term.empty()) dyn.params.terms.push_back(emadiag::sim::parse_term(term));
+        brk.params.terms = dyn.params.terms;
+        return std::vector<emadiag::Run>{emadiag::make_run(dyn, emadiag::sim::simulate(dyn)),
+                                         emadiag::make_run(brk, emadiag::sim::simulate(brk))};
+    };
     std::vector<std::pair<const PairCase*, int>> list;
     for (const auto& pc : kPairCases) list.emplace_back(&pc, runs);
     for (const auto& [pc, n] : list) {
@@ -140,17 +154,7 @@ void run_pairs(int runs, int clean_runs, std::mt19937_64& g, std::uint64_t& run_
             char buf[32];
             std::snprintf(buf, sizeof buf, "%.6g", a);
             text.replace(text.find("{a}"), 3, buf);
-            emadiag::sim::SimConfig dyn, brk;
-            dyn.load_case = brk.load_case = emadiag::sim::LoadCase::B;
-            dyn.sequence = emadiag::sim::Sequence::Dyn;
-            brk.sequence = emadiag::sim::Sequence::Brk;
-            dyn.noise = brk.noise = noise;
-            dyn.seed = ++run_seed;
-            brk.seed = ++run_seed;
-            dyn.params.terms.push_back(emadiag::sim::parse_term(text));
-            brk.params.terms = dyn.params.terms;
-            std::vector<emadiag::Run> pair = {emadiag::make_run(dyn, emadiag::sim::simulate(dyn)),
-                                              emadiag::make_run(brk, emadiag::sim::simulate(brk))};
+            const std::vector<emadiag::Run> pair = make_pair(text);
             const auto t0 = std::chrono::steady_clock::now();
             const auto rep = emadiag::discovery::discover_runs(pair, {"dyn", "brk"});
             const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -187,15 +191,7 @@ void run_pairs(int runs, int clean_runs, std::mt19937_64& g, std::uint64_t& run_
     }
     int claims = 0;
     for (int r = 0; r < clean_runs; ++r) {
-        emadiag::sim::SimConfig dyn, brk;
-        dyn.load_case = brk.load_case = emadiag::sim::LoadCase::B;
-        dyn.sequence = emadiag::sim::Sequence::Dyn;
-        brk.sequence = emadiag::sim::Sequence::Brk;
-        dyn.noise = brk.noise = noise;
-        dyn.seed = ++run_seed;
-        brk.seed = ++run_seed;
-        const auto rep = emadiag::discovery::discover_runs(
-            {emadiag::make_run(dyn, emadiag::sim::simulate(dyn)), emadiag::make_run(brk, emadiag::sim::simulate(brk))}, {"dyn", "brk"});
+        const auto rep = emadiag::discovery::discover_runs(make_pair(""), {"dyn", "brk"});
         const auto& b = rep.breakaways.at(0);
         if (b.significant || !b.terms.empty()) {
             ++claims;

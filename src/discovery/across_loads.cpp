@@ -1,6 +1,7 @@
 #include "discovery/across_loads.hpp"
 
 #include "discovery/physics_names.hpp"
+#include "discovery/screen_windows.hpp"
 #include "discovery/resimulation.hpp"
 #include "discovery/effect_screen.hpp"
 #include "discovery/run_signals.hpp"
@@ -15,12 +16,6 @@
 
 namespace emadiag::discovery {
 namespace {
-
-std::string fmt(double v) {
-    char b[32];
-    std::snprintf(b, sizeof b, "%.4g", v);
-    return b;
-}
 
 /// Iterations of each per-run fit (they start next to the optimum: the run's own model).
 constexpr int kLoadFitIterations = 6;
@@ -206,11 +201,11 @@ AcrossLoads across_loads(const std::vector<const Run*>& runs, const std::vector<
     std::stable_sort(out.hypotheses.begin(), out.hypotheses.end(),
                      [](const LoadHypothesis& a, const LoadHypothesis& b) { return a.mean_cost < b.mean_cost; });
     auto describe = [&](const LoadHypothesis& h) {
-        std::string s = h.text + ": " + h.parameter + " " + fmt(h.pooled) + " +/- " + fmt(h.pooled_se) + ", mean trajectory cost " +
-                        fmt(h.mean_cost) + " (";
-        for (std::size_t i = 0; i < h.costs.size(); ++i) s += (i ? ", " : "") + out.load_cases[i] + " " + fmt(h.costs[i]);
+        std::string s = h.text + ": " + h.parameter + " " + fmt4(h.pooled) + " +/- " + fmt4(h.pooled_se) + ", mean trajectory cost " +
+                        fmt4(h.mean_cost) + " (";
+        for (std::size_t i = 0; i < h.costs.size(); ++i) s += (i ? ", " : "") + out.load_cases[i] + " " + fmt4(h.costs[i]);
         s += ")";
-        if (!h.consistent) s += ", the runs disagree on it (chi2 " + fmt(h.chi2) + " on " + std::to_string(h.dof) + " dof)";
+        if (!h.consistent) s += ", the runs disagree on it (chi2 " + fmt4(h.chi2) + " on " + std::to_string(h.dof) + " dof)";
         return s;
     };
     if (out.hypotheses.empty()) {

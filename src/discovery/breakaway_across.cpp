@@ -3,6 +3,7 @@
 #include "core/emadiag_error.hpp"
 #include "discovery/model_correction.hpp"
 #include "discovery/physics_names.hpp"
+#include "discovery/screen_windows.hpp"
 #include "discovery/resimulation.hpp"
 #include "discovery/run_signals.hpp"
 #include "estimation/breakaway.hpp"
@@ -15,12 +16,6 @@
 
 namespace emadiag::discovery {
 namespace {
-
-std::string fmt(double v) {
-    char b[32];
-    std::snprintf(b, sizeof b, "%.4g", v);
-    return b;
-}
 
 /// The thresholds S_+ and S_- of a BRK run, with their standard errors; nullopt and `why` when
 /// either breakaway is missing.
@@ -94,7 +89,7 @@ BreakawayAcross breakaway_across(const Run& brk, const std::string& brk_label, c
         out.sensor_correction = sensors.text();
         std::string why_recorded;
         if (const auto recorded = thresholds(brk, why_recorded)) {
-            out.as_recorded = "as recorded S+ " + fmt(recorded->up) + ", S- " + fmt(recorded->down) + " N m";
+            out.as_recorded = "as recorded S+ " + fmt4(recorded->up) + ", S- " + fmt4(recorded->down) + " N m";
         } else {
             out.as_recorded = "as recorded: " + why_recorded;
         }
@@ -154,8 +149,8 @@ BreakawayAcross breakaway_across(const Run& brk, const std::string& brk_label, c
     // The analysis of the model's own, noise-free BRK run must give back the FSJ the model was
     // given (to the chatter's fraction of a step), or the two are not comparable.
     if (std::abs(0.5 * (model->up + model->down) - out.fsj_nm) > kBrkModelFsjTolerance * out.fsj_nm) {
-        out.problem = "the breakaway analysis of the model's BRK run gives thresholds " + fmt(model->up) + " and " +
-                      fmt(model->down) + " N m for an FSJ of " + fmt(out.fsj_nm) + " N m";
+        out.problem = "the breakaway analysis of the model's BRK run gives thresholds " + fmt4(model->up) + " and " +
+                      fmt4(model->down) + " N m for an FSJ of " + fmt4(out.fsj_nm) + " N m";
         out.verdict = "not compared: " + out.problem;
         return out;
     }
@@ -163,10 +158,10 @@ BreakawayAcross breakaway_across(const Run& brk, const std::string& brk_label, c
     out.asymmetry_nm = 0.5 * ((meas->up - model->up) - (meas->down - model->down));
     out.z = out.asymmetry_se_nm > 0 ? out.asymmetry_nm / out.asymmetry_se_nm : 0.0;
     out.significant = std::abs(out.z) >= kBrkAsymmetryMinZ;
-    const std::string measured = "BRK thresholds S+ " + fmt(meas->up) + " +/- " + fmt(meas->up_se) + ", S- " +
-                                 fmt(meas->down) + " +/- " + fmt(meas->down_se) + " N m against the model's " +
-                                 fmt(model->up) + " and " + fmt(model->down) + ": asymmetry " + fmt(out.asymmetry_nm) +
-                                 " +/- " + fmt(out.asymmetry_se_nm) + " N m (z = " + fmt(out.z) + ")" +
+    const std::string measured = "BRK thresholds S+ " + fmt4(meas->up) + " +/- " + fmt4(meas->up_se) + ", S- " +
+                                 fmt4(meas->down) + " +/- " + fmt4(meas->down_se) + " N m against the model's " +
+                                 fmt4(model->up) + " and " + fmt4(model->down) + ": asymmetry " + fmt4(out.asymmetry_nm) +
+                                 " +/- " + fmt4(out.asymmetry_se_nm) + " N m (z = " + fmt4(out.z) + ")" +
                                  (out.sensor_correction.empty() ? std::string()
                                                                 : ", with the DYN model's sensor errors (" + out.sensor_correction +
                                                                       ") removed from the BRK run (" + out.as_recorded + ")");
@@ -248,8 +243,8 @@ BreakawayAcross breakaway_across(const Run& brk, const std::string& brk_label, c
     std::stable_sort(out.hypotheses.begin(), out.hypotheses.end(),
                      [](const RestOffsetHypothesis& a, const RestOffsetHypothesis& b) { return a.dyn_cost < b.dyn_cost; });
     const RestOffsetHypothesis& best = out.hypotheses.front();
-    const std::string dyn_text = "DYN trajectory cost " + fmt(out.dyn_cost_model) + " with the model's own health refitted, " +
-                                 fmt(best.dyn_cost) + " with " + best.term.text();
+    const std::string dyn_text = "DYN trajectory cost " + fmt4(out.dyn_cost_model) + " with the model's own health refitted, " +
+                                 fmt4(best.dyn_cost) + " with " + best.term.text();
     // The BRK run shows that the offset exists; the DYN run must not refute the candidate (its cost
     // no worse than the model's, or not told apart from it) and tells the candidates apart.
     if (best.dyn_cost > out.dyn_cost_model && !not_told_apart(best.dyn_cost, out.dyn_cost_model, kHypothesisRatio)) {
@@ -276,11 +271,11 @@ BreakawayAcross breakaway_across(const Run& brk, const std::string& brk_label, c
     if (out.equivalent) {
         out.verdict += "; NOT told apart from " + out.hypotheses[1].text + " (" + out.hypotheses[1].term.text() +
                        (out.hypotheses[1].replaces.empty() ? "" : " in place of " + out.hypotheses[1].replaces) + ", DYN cost " +
-                       fmt(out.hypotheses[1].dyn_cost) + "): both reported";
+                       fmt4(out.hypotheses[1].dyn_cost) + "): both reported";
     } else if (out.hypotheses.size() >= 2) {
-        out.verdict += "; told apart from " + out.hypotheses[1].text + " (DYN cost " + fmt(out.hypotheses[1].dyn_cost) + ")";
+        out.verdict += "; told apart from " + out.hypotheses[1].text + " (DYN cost " + fmt4(out.hypotheses[1].dyn_cost) + ")";
     }
-    out.verdict += "; FDJ " + fmt(out.fdj_before_nm) + " -> " + fmt(best.fdj_nm) + " N m)";
+    out.verdict += "; FDJ " + fmt4(out.fdj_before_nm) + " -> " + fmt4(best.fdj_nm) + " N m)";
     return out;
 }
 

@@ -1,4 +1,5 @@
 #include "discovery/candidate_effect.hpp"
+#include "discovery/screen_windows.hpp"
 
 #include "core/emadiag_error.hpp"
 
@@ -45,13 +46,6 @@ constexpr FieldName kFieldNames[] = {
 
 double surface_deg(const RunSignals& s, std::size_t k) {
     return 0.5 * (s.theta_start_rad[k] + s.theta_m_rad[k]) / s.tau * 180.0 / std::numbers::pi;
-}
-
-std::string fmt(double v) {
-    std::ostringstream os;
-    os.precision(4);
-    os << v;
-    return os.str();
 }
 
 }  // namespace
@@ -222,9 +216,9 @@ std::vector<std::string> fitted_sim_effects(EffectKind kind) {
 
 std::string shape_text(const EffectShape& shape) {
     switch (shape.kind) {
-        case EffectKind::Stribeck: return "w_s = " + fmt(shape.shape1) + " rad/s";
-        case EffectKind::Spall: return "centre " + fmt(shape.shape1) + " deg, width " + fmt(shape.shape2) + " deg";
-        case EffectKind::Ripple: return "p = " + fmt(shape.shape1) + " per rev";
+        case EffectKind::Stribeck: return "w_s = " + fmt4(shape.shape1) + " rad/s";
+        case EffectKind::Spall: return "centre " + fmt4(shape.shape1) + " deg, width " + fmt4(shape.shape2) + " deg";
+        case EffectKind::Ripple: return "p = " + fmt4(shape.shape1) + " per rev";
         default: return {};
     }
 }

@@ -4,6 +4,7 @@
 #include "discovery/across_loads.hpp"
 #include "discovery/breakaway_across.hpp"
 #include "discovery/physics_names.hpp"
+#include "discovery/screen_windows.hpp"
 #include "estimation/health_estimate.hpp"
 #include "discovery/term_library.hpp"
 
@@ -34,12 +35,6 @@ void append(RunSignals& all, const RunSignals& s, const std::vector<char>& mask,
     cat(all.residual_torque_nm, s.residual_torque_nm);
     cat(all.slipping, s.slipping);
     cat(all_mask, mask);
-}
-
-std::string fmt(double v) {
-    char b[32];
-    std::snprintf(b, sizeof b, "%.4g", v);
-    return b;
 }
 
 /// The value compared across runs for a step: its first term's coefficient, or its first fitted effect.
@@ -227,8 +222,8 @@ std::string AcrossRunsReport::summary() const {
     for (const auto& b : breakaways) s += "across DYN and BRK (" + b.brk_label + " with " + b.dyn_label + "): " + b.verdict + "\n";
     for (const auto& e : effects) {
         s += "across the runs: " + e.text + " (" + e.parameter + ") in " + std::to_string(e.runs.size()) + " runs, mean " +
-             fmt(e.mean) + (e.changes ? ", CHANGES from run to run: slope " + fmt(e.slope_per_run) + " +/- " +
-                                            fmt(e.slope_se) + " per run"
+             fmt4(e.mean) + (e.changes ? ", CHANGES from run to run: slope " + fmt4(e.slope_per_run) + " +/- " +
+                                            fmt4(e.slope_se) + " per run"
                                       : ", consistent across the runs") +
              "\n";
     }

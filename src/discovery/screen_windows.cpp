@@ -54,4 +54,10 @@ std::string fmt3(double v) {
     return b;
 }
 
+std::string fmt4(double v) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.4g", v);
+    return b;
+}
+
 }  // namespace emadiag::discovery

@@ -38,5 +38,7 @@ struct WindowedBase {
 
 /// A number in a reason text ("%.3g").
 [[nodiscard]] std::string fmt3(double v);
+/// A number in a summary or verdict ("%.4g").
+[[nodiscard]] std::string fmt4(double v);
 
 }  // namespace emadiag::discovery

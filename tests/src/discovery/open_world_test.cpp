@@ -28,14 +28,19 @@ using ::testing::Contains;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 
-emadiag::Run run_with_term(const std::string& term, std::uint64_t seed, sim::NoiseProfile noise = sim::NoiseProfile::Typical) {
+emadiag::Run simulated_run(sim::LoadCase load, sim::Sequence sequence, const std::string& term, std::uint64_t seed,
+                           sim::NoiseProfile noise = sim::NoiseProfile::Typical) {
     sim::SimConfig c;
-    c.load_case = sim::LoadCase::B;
-    c.sequence = sim::Sequence::Dyn;
+    c.load_case = load;
+    c.sequence = sequence;
     c.noise = noise;
     c.seed = seed;
     if (!term.empty()) c.params.terms.push_back(sim::parse_term(term));
     return make_run(c, sim::simulate(c));
+}
+
+emadiag::Run run_with_term(const std::string& term, std::uint64_t seed, sim::NoiseProfile noise = sim::NoiseProfile::Typical) {
+    return simulated_run(sim::LoadCase::B, sim::Sequence::Dyn, term, seed, noise);
 }
 
 TEST(PhysicsNames, CommonFormsHaveNamesOthersAreStructure) {
@@ -323,13 +328,7 @@ TEST(OpenWorld, NoLesserExplanationIsNamedInPlaceOfOneBelowTheSizeFloor) {
 }
 
 emadiag::Run brk_with_term(const std::string& term, std::uint64_t seed) {
-    sim::SimConfig c;
-    c.load_case = sim::LoadCase::B;
-    c.sequence = sim::Sequence::Brk;
-    c.noise = sim::NoiseProfile::Typical;
-    c.seed = seed;
-    if (!term.empty()) c.params.terms.push_back(sim::parse_term(term));
-    return make_run(c, sim::simulate(c));
+    return simulated_run(sim::LoadCase::B, sim::Sequence::Brk, term, seed);
 }
 
 // Across DYN and BRK (docs/discovery.md): seeds 6101-6304 were not used to develop it (that used
@@ -436,13 +435,7 @@ TEST(ManyRuns, AnEffectTooWeakForEachRunIsFoundOnlyInTheRunsTogether) {
 
 
 emadiag::Run run_at(sim::LoadCase load, const std::string& term, std::uint64_t seed) {
-    sim::SimConfig c;
-    c.load_case = load;
-    c.sequence = sim::Sequence::Dyn;
-    c.noise = sim::NoiseProfile::Typical;
-    c.seed = seed;
-    if (!term.empty()) c.params.terms.push_back(sim::parse_term(term));
-    return make_run(c, sim::simulate(c));
+    return simulated_run(load, sim::Sequence::Dyn, term, seed);
 }
 
 // Across load cases (docs/discovery.md): seeds 7101-7204 were not used to develop it.
