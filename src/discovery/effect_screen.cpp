@@ -92,4 +92,23 @@ ScreenResult screen_effects(const RunSignals& s, const ScreenInput& in) {
     return out;
 }
 
+std::optional<CandidateEvidence> evidence_at(const RunSignals& s, const ScreenInput& in, const EffectShape& shape) {
+    const WindowedBase wb = windowed_base(s, in);
+    Eigen::VectorXd x = wb.window_sums(signature(s, shape));
+    const double sxx_raw = x.squaredNorm();
+    x = wb.project_out(x);
+    const double sxx = x.squaredNorm();
+    if (!(sxx > kMinResidualColumnFraction * sxx_raw) || sxx_raw == 0) return std::nullopt;
+    const double sxy = x.dot(wb.e0);
+    const double dof = static_cast<double>(wb.windows.size()) - static_cast<double>(in.base_columns.size()) - 1.0;
+    if (!(dof > 0)) return std::nullopt;
+    CandidateEvidence e;
+    e.shape = shape;
+    e.amplitude = sxy / sxx;
+    const double rss1 = std::max(wb.rss0 - sxy * sxy / sxx, std::numeric_limits<double>::min());
+    e.amplitude_se = std::sqrt(rss1 / dof / sxx);
+    e.rss_ratio = rss1 / wb.rss0;
+    return e;
+}
+
 }  // namespace emadiag::discovery

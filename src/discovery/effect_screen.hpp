@@ -18,6 +18,7 @@
 #include "discovery/run_signals.hpp"
 
 #include <string>
+#include <optional>
 #include <vector>
 
 namespace emadiag::discovery {
@@ -61,5 +62,11 @@ struct ScreenResult {
 /// Screens every candidate kind not excluded. Throws EmadiagError naming the count and
 /// kMinScreenSamples when the mask holds too few samples.
 [[nodiscard]] ScreenResult screen_effects(const RunSignals& measured, const ScreenInput& in);
+
+/// The screening's least squares at one shape only: its amplitude and standard error on the residual
+/// of `in` after the base columns (accepted, sign, BIC and peak are not judged). nullopt when the
+/// shape's column is inside the base's span.
+[[nodiscard]] std::optional<CandidateEvidence> evidence_at(const RunSignals& measured, const ScreenInput& in,
+                                                           const EffectShape& shape);
 
 }  // namespace emadiag::discovery
