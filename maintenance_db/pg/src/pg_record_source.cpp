@@ -2,6 +2,8 @@
 #include "emadiag/db/pg_fleet.hpp"
 
 #include <algorithm>
+#include <bit>
+#include <cstdint>
 #include <charconv>
 #include <limits>
 #include <map>
@@ -94,6 +96,46 @@ StoredInstallation read_installation(const Row& r) {
     return i;
 }
 
+/// The findings of one row of session_findings (schema 5, pg_schema/005_report_findings.sql), appended
+/// to `to`. Throws DbError naming the session and the byte where the row stops making sense.
+void unpack_findings(std::string_view bytes, std::int64_t session_id, const std::string& uri, std::vector<StoredFinding>& to) {
+    std::size_t at = 0;
+    const auto bad = [&](const char* what) {
+        return DbError("fleet server " + uri + ": the packed findings of session " + std::to_string(session_id) + " (" +
+                           std::to_string(bytes.size()) + " bytes) are damaged: " + what + " at byte " + std::to_string(at),
+                       DbErrorKind::Invalid);
+    };
+    const auto be = [&](std::size_t n, const char* what) {
+        if (bytes.size() - at < n) throw bad(what);
+        std::uint64_t v = 0;
+        for (std::size_t i = 0; i < n; ++i) v = (v << 8) | static_cast<unsigned char>(bytes[at + i]);
+        at += n;
+        return v;
+    };
+    const auto text_field = [&](std::string& out) {
+        const auto n = static_cast<std::size_t>(be(4, "a text's length cut short"));
+        if (bytes.size() - at < n) throw bad("a text longer than the row");
+        out.assign(bytes.substr(at, n));
+        at += n;
+    };
+    const auto number = [&](std::optional<double>& out) {
+        const auto flag = be(1, "a number's flag cut short");
+        if (flag > 1) throw bad("a number's flag neither 0 nor 1");
+        if (flag == 1) out = std::bit_cast<double>(be(8, "a float8 cut short"));
+    };
+    while (at < bytes.size()) {
+        StoredFinding& f = to.emplace_back();
+        text_field(f.parameter);
+        text_field(f.estimator);
+        number(f.value);
+        number(f.std_error);
+        number(f.limit_value);
+        text_field(f.limit_kind);
+        text_field(f.status);
+        text_field(f.note);
+    }
+}
+
 }  // namespace
 
 PgRecordSource::PgRecordSource(const std::string& uri) : pg_(uri) {
@@ -103,7 +145,11 @@ PgRecordSource::PgRecordSource(const std::string& uri) : pg_(uri) {
                       DbErrorKind::Invalid);
     // One snapshot for the whole report: a sync committing meanwhile shows entirely or not at all.
     pg_.exec("BEGIN ISOLATION LEVEL REPEATABLE READ READ ONLY");
-    schema_version_ = std::stoi(pg_.query("SELECT coalesce(max(version), 0) FROM fleet_schema_version").at(0).at(0).value_or("0"));
+    const auto v5 = pg_.query("SELECT coalesce(max(version), 0), current_setting('client_encoding') = current_setting('server_encoding') "
+                              "FROM fleet_schema_version");
+    schema_version_ = std::stoi(v5.at(0).at(0).value_or("0"));
+    // The packed findings hold their texts in the server's encoding; the rows of a query come in the client's.
+    packed_findings_ = schema_version_ >= 5 && v5.at(0).at(1) == std::optional<std::string>("t");
 }
 
 std::vector<std::string> PgRecordSource::tail_numbers() {
@@ -184,7 +230,29 @@ std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string&
                        }});
     if (by_tail) queries.push_back({"RESET enable_bitmapscan", {}, false, {}});
     // Both in the binary format: the numbers come as their bytes (no text to print and parse).
-    if (schema_version_ >= 3 && by_tail) {
+    if (packed_findings_ && by_tail) {
+        // A tail's findings on schema 5: one row per session (session_findings), one range of its index;
+        // both queries at once, as below. A session with findings added by a later statement has a
+        // row for each: its findings are then put back in (parameter, estimator) order.
+        std::vector<std::size_t> merged;
+        queries.push_back({"SELECT p.session_id, p.findings FROM session_findings p WHERE p.tail_number = $1 ORDER BY p.session_id", {value}, true,
+                           [&](const Row& r) {
+                               const std::int64_t session_id = int_of(r, 0);
+                               const auto it = index.find(session_id);
+                               if (it == index.end())
+                                   throw DbError("fleet server " + pg_.uri() + ": findings of session " + std::to_string(session_id) +
+                                                 " are not among the sessions where " + where + " ($1 = " + value + ")");
+                               auto& findings = out[it->second].findings;
+                               if (!findings.empty()) merged.push_back(it->second);
+                               unpack_findings(r.text(1), session_id, pg_.uri(), findings);
+                           }});
+        pg_.each_row(queries);
+        keep_places();
+        for (const std::size_t i : merged)
+            std::sort(out[i].findings.begin(), out[i].findings.end(), [](const StoredFinding& a, const StoredFinding& b) {
+                return std::tie(a.parameter, a.estimator) < std::tie(b.parameter, b.estimator);
+            });
+    } else if (schema_version_ >= 3 && by_tail) {
         // A tail's findings on schema 3: one range of the index (tail_number, session_id, parameter, estimator)
         // that holds every column the report reads (an index-only scan once vacuum has marked the pages).
         // They do not depend on the sessions' rows, so both queries go at once (pipeline mode): the

@@ -140,6 +140,7 @@ private:
     std::vector<StoredTestSession> sessions_where(const std::string& where, const std::string& value, const SessionListParts& parts, bool by_tail);
     PgConnection pg_;
     int schema_version_ = 0;
+    bool packed_findings_ = false;  ///< schema 5's session_findings, readable as stored (client encoding = server encoding)
     /// The positions' ATA reference and description (position -> both), read once in the snapshot.
     std::optional<std::map<std::string, std::pair<std::string, std::string>>> places_;
 };
