@@ -165,6 +165,10 @@ check_refused "UPDATE of the fleet summary" "permission denied" "$(st station_b 
 check_refused "INSERT of packed findings" "permission denied" "$(st station_b "INSERT INTO session_findings VALUES ('N1EM', $b_sid, '')")"
 check_refused "UPDATE of packed findings" "permission denied" "$(st station_b "UPDATE session_findings SET findings = '' WHERE session_id = $a_sid")"
 check_refused "DELETE of packed findings" "permission denied" "$(st station_b "DELETE FROM session_findings WHERE session_id = $a_sid")"
+# Schema 6: so are the report's packed sessions, by the sessions' trigger.
+check_refused "INSERT of a packed session" "permission denied" "$(st station_b "INSERT INTO session_rows VALUES ('N1EM', '2027-01-01T00:00:00Z', $b_sid, '')")"
+check_refused "UPDATE of a packed session" "permission denied" "$(st station_b "UPDATE session_rows SET session = '' WHERE session_id = $a_sid")"
+check_refused "DELETE of a packed session" "permission denied" "$(st station_b "DELETE FROM session_rows WHERE session_id = $a_sid")"
 check_refused "INSERT of a finding into station_a's session" "violates foreign key" \
   "$(st station_b "INSERT INTO findings(session_id, parameter, estimator, limit_kind, status) VALUES ($a_sid, 'X', 'physics', 'none', 'WITHIN')")"
 check_refused "INSERT of a finding into station_a's session posing as station_a" "permission denied" \
