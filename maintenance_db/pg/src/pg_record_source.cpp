@@ -323,8 +323,10 @@ std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string&
                 return std::tie(a.parameter, a.estimator) < std::tie(b.parameter, b.estimator);
             });
     } else if (schema_version_ >= 3 && by_tail) {
-        // A tail's findings on schema 3: one range of the index (tail_number, session_id, parameter, estimator)
-        // that holds every column the report reads (an index-only scan once vacuum has marked the pages).
+        // A tail's findings on schema 3: one range of the index (tail_number, session_id, parameter, estimator),
+        // which on schemas 3 to 6 also holds every column the report reads (an index-only scan once vacuum
+        // has marked the pages; schema 7 leaves them to the table: on schema 5 and later this path serves
+        // only a client whose encoding differs from the server's).
         // They do not depend on the sessions' rows, so both queries go at once (pipeline mode): the
         // server looks up the findings while the sessions are read here.
         queries.push_back({findings_sql + "f.tail_number = $1" + findings_order, {value}, true, read_finding});
