@@ -8,6 +8,9 @@
 // Goals: sync >= 5,000 sessions/s, fleet <= 2 s, report <= 50 ms.
 //   pg_scale_bench STATION_DB STATION_URI [BATCH [TAIL [OWNER_URI]]]   (scripts/pg/run_pg_bench.sh runs it on a temporary server;
 //   with OWNER_URI the tables are vacuumed and analyzed after the sync, as autovacuum would on a running server)
+//   pg_scale_bench --reports STATION_URI [TAIL]: the report and fleet timings alone, in a fresh process, as `emadiag
+//   report` runs (after syncing 5.84 M sessions, the syncing process computed the report 1.7 times as long as at
+//   50 x 730 in sessions 8 and 9; run_pg_bench.sh runs both, docs/fleet-server.md session 9)
 #include "emadiag/db/database.hpp"
 #include "emadiag/db/pg_fleet.hpp"
 #include "prognostics/fleet_record.hpp"
@@ -23,6 +26,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -83,12 +87,17 @@ public:
     explicit TimedSource(db::RecordSource& inner) : inner_(inner) {}
     double fetch_s = 0;
     int calls = 0;
+    std::map<std::string, std::pair<int, double>> by_call;  ///< call -> (calls, wall seconds)
     template <class F>
-    auto timed(F f) -> decltype(f()) {
+    auto timed(F f, const char* call = __builtin_FUNCTION()) -> decltype(f()) {
         const auto t0 = Clock::now();
         auto r = f();
-        fetch_s += seconds_since(t0);
+        const double s = seconds_since(t0);
+        fetch_s += s;
         ++calls;
+        auto& c = by_call[call];
+        ++c.first;
+        c.second += s;
         return r;
     }
     [[nodiscard]] const std::string& name() const override { return inner_.name(); }
@@ -117,12 +126,85 @@ private:
     db::RecordSource& inner_;
 };
 
+/// `report` (build_fleet_record) and `fleet` (build_fleet_view) from the server: best of 5 and of 2,
+/// the report's reading split by call. `label` starts the lines (the --reports mode's fresh process).
+void time_reports(const std::string& uri, const std::string& tail, const char* label) {
+    db::PgRecordSource source(uri);
+    pg::FleetRecordOptions ro;
+    double best_report = 1e9, best_report_cpu = 1e9, best_fetch = 1e9;
+    std::int64_t sessions = 0;
+    int calls = 0;
+    std::map<std::string, std::pair<int, double>> by_call;
+    for (int rep = 0; rep < 5; ++rep) {
+        TimedSource timed(source);
+        const auto t0 = Clock::now();
+        const double c1 = cpu_seconds();
+        const pg::FleetRecord record = pg::build_fleet_record(timed, tail, ro);
+        const double wall = seconds_since(t0);
+        if (wall < best_report) {
+            best_report = wall;
+            best_fetch = timed.fetch_s;
+            calls = timed.calls;
+            by_call = timed.by_call;
+        }
+        best_report_cpu = std::min(best_report_cpu, cpu_seconds() - c1);
+        sessions = record.sessions_total;
+    }
+    std::printf("%sreport            : %.1f ms wall, %.1f ms client CPU for tail %s (%lld sessions, %d draws) (goal <= 50 ms); best of 5\n", label,
+                best_report * 1e3, best_report_cpu * 1e3, tail.c_str(), static_cast<long long>(sessions), ro.rul.draws);
+    std::printf("  of which reading the record from the server: %.1f ms wall in %d calls; computing it: %.1f ms\n", best_fetch * 1e3, calls,
+                (best_report - best_fetch) * 1e3);
+    std::string split;
+    for (const auto& [call, c] : by_call) {
+        char part[160];
+        std::snprintf(part, sizeof part, "%s%s %d x %.1f ms", split.empty() ? "" : ", ", call.c_str(), c.first, c.second * 1e3 / c.first);
+        split += part;
+    }
+    std::printf("    by call: %s\n", split.c_str());
+    {
+        // The report's largest call: the tail's sessions with their findings (the parts a report reads).
+        double best_load = 1e9, best_load_cpu = 1e9;
+        for (int rep = 0; rep < 10; ++rep) {
+            const auto t0 = Clock::now();
+            const double c1 = cpu_seconds();
+            (void)source.sessions_of_tail(tail, db::SessionListParts{false, false, false});
+            best_load = std::min(best_load, seconds_since(t0));
+            best_load_cpu = std::min(best_load_cpu, cpu_seconds() - c1);
+        }
+        std::printf("  of which the tail's sessions with their findings (one call, best of 10): %.1f ms wall, %.1f ms client CPU\n",
+                    best_load * 1e3, best_load_cpu * 1e3);
+    }
+    pg::FleetOptions fo;
+    double best_fleet = 1e9, best_fleet_cpu = 1e9;
+    std::size_t rows = 0;
+    for (int rep = 0; rep < 2; ++rep) {
+        const auto t0 = Clock::now();
+        const double c1 = cpu_seconds();
+        const auto view = pg::build_fleet_view(source, fo);
+        best_fleet = std::min(best_fleet, seconds_since(t0));
+        best_fleet_cpu = std::min(best_fleet_cpu, cpu_seconds() - c1);
+        rows = view.size();
+    }
+    std::printf("%sfleet             : %.2f s wall, %.2f s client CPU for %zu tail positions ranked (%d draws each) (goal <= 2 s)\n", label,
+                best_fleet, best_fleet_cpu, rows, fo.rul.draws);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
     if (argc < 3) {
-        std::fprintf(stderr, "usage: pg_scale_bench STATION_DB STATION_URI [BATCH [TAIL]]\n");
+        std::fprintf(stderr, "usage: pg_scale_bench STATION_DB STATION_URI [BATCH [TAIL [OWNER_URI]]]\n"
+                             "       pg_scale_bench --reports STATION_URI [TAIL]\n");
         return 2;
+    }
+    if (std::string(argv[1]) == "--reports") {  // a fresh process, as `emadiag report` runs: no sync before it
+        try {
+            time_reports(argv[2], argc > 3 ? argv[3] : "F-W0000", "fresh process: ");
+            return 0;
+        } catch (const std::exception& e) {
+            std::fprintf(stderr, "pg_scale_bench: %s\n", e.what());
+            return 1;
+        }
     }
     const std::string station_path = argv[1], uri = argv[2];
     const std::size_t batch = argc > 3 ? static_cast<std::size_t>(std::atol(argv[3])) : 10000;
@@ -190,55 +272,7 @@ int main(int argc, char** argv) {
         std::printf("database          : %.1f MB on the server, %.0f bytes per session\n", bytes / 1e6,
                     bytes / static_cast<double>(std::max<std::int64_t>(total, 1)));
 
-        db::PgRecordSource source(uri);
-        pg::FleetRecordOptions ro;
-        double best_report = 1e9, best_report_cpu = 1e9, best_fetch = 1e9;
-        std::int64_t sessions = 0;
-        int calls = 0;
-        for (int rep = 0; rep < 5; ++rep) {
-            TimedSource timed(source);
-            const auto t0 = Clock::now();
-            const double c1 = cpu_seconds();
-            const pg::FleetRecord record = pg::build_fleet_record(timed, tail, ro);
-            const double wall = seconds_since(t0);
-            if (wall < best_report) {
-                best_report = wall;
-                best_fetch = timed.fetch_s;
-                calls = timed.calls;
-            }
-            best_report_cpu = std::min(best_report_cpu, cpu_seconds() - c1);
-            sessions = record.sessions_total;
-        }
-        std::printf("report            : %.1f ms wall, %.1f ms client CPU for tail %s (%lld sessions, %d draws) (goal <= 50 ms); best of 5\n",
-                    best_report * 1e3, best_report_cpu * 1e3, tail.c_str(), static_cast<long long>(sessions), ro.rul.draws);
-        std::printf("  of which reading the record from the server: %.1f ms wall in %d calls; computing it: %.1f ms\n", best_fetch * 1e3, calls,
-                    (best_report - best_fetch) * 1e3);
-        {
-            // The report's largest call: the tail's sessions with their findings (the parts a report reads).
-            double best_load = 1e9, best_load_cpu = 1e9;
-            for (int rep = 0; rep < 10; ++rep) {
-                const auto t0 = Clock::now();
-                const double c1 = cpu_seconds();
-                (void)source.sessions_of_tail(tail, db::SessionListParts{false, false, false});
-                best_load = std::min(best_load, seconds_since(t0));
-                best_load_cpu = std::min(best_load_cpu, cpu_seconds() - c1);
-            }
-            std::printf("  of which the tail's sessions with their findings (one call, best of 10): %.1f ms wall, %.1f ms client CPU\n",
-                        best_load * 1e3, best_load_cpu * 1e3);
-        }
-        pg::FleetOptions fo;
-        double best_fleet = 1e9, best_fleet_cpu = 1e9;
-        std::size_t rows = 0;
-        for (int rep = 0; rep < 2; ++rep) {
-            const auto t0 = Clock::now();
-            const double c1 = cpu_seconds();
-            const auto view = pg::build_fleet_view(source, fo);
-            best_fleet = std::min(best_fleet, seconds_since(t0));
-            best_fleet_cpu = std::min(best_fleet_cpu, cpu_seconds() - c1);
-            rows = view.size();
-        }
-        std::printf("fleet             : %.2f s wall, %.2f s client CPU for %zu tail positions ranked (%d draws each) (goal <= 2 s)\n",
-                    best_fleet, best_fleet_cpu, rows, fo.rul.draws);
+        time_reports(uri, tail, "");
         return 0;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "pg_scale_bench: %s\n", e.what());

@@ -161,6 +161,14 @@ check_refused "DELETE of station_a's findings" "permission denied" "$(st station
 check_refused "TRUNCATE of the findings" "permission denied" "$(st station_b "TRUNCATE findings")"
 check_refused "UPDATE of its own session" "permission denied" "$(st station_b "UPDATE test_sessions SET verdict = 'SERVICEABLE' WHERE session_id = $b_sid")"
 check_refused "UPDATE of the fleet summary" "permission denied" "$(st station_b "UPDATE series_stats SET n = 0")"
+# Schema 5: the report's packed findings are written by the findings' trigger alone.
+check_refused "INSERT of packed findings" "permission denied" "$(st station_b "INSERT INTO session_findings VALUES ('N1EM', $b_sid, '')")"
+check_refused "UPDATE of packed findings" "permission denied" "$(st station_b "UPDATE session_findings SET findings = '' WHERE session_id = $a_sid")"
+check_refused "DELETE of packed findings" "permission denied" "$(st station_b "DELETE FROM session_findings WHERE session_id = $a_sid")"
+# Schema 6: so are the report's packed sessions, by the sessions' trigger.
+check_refused "INSERT of a packed session" "permission denied" "$(st station_b "INSERT INTO session_rows VALUES ('N1EM', '2027-01-01T00:00:00Z', $b_sid, '')")"
+check_refused "UPDATE of a packed session" "permission denied" "$(st station_b "UPDATE session_rows SET session = '' WHERE session_id = $a_sid")"
+check_refused "DELETE of a packed session" "permission denied" "$(st station_b "DELETE FROM session_rows WHERE session_id = $a_sid")"
 check_refused "INSERT of a finding into station_a's session" "violates foreign key" \
   "$(st station_b "INSERT INTO findings(session_id, parameter, estimator, limit_kind, status) VALUES ($a_sid, 'X', 'physics', 'none', 'WITHIN')")"
 check_refused "INSERT of a finding into station_a's session posing as station_a" "permission denied" \
@@ -214,11 +222,12 @@ out="$("$E" report --db "$U" --tail N9ZZ 2>&1)"; rc=$?
 [ $rc -ne 0 ] && grep -q "is not in" <<< "$out" && pass "an unknown tail from PostgreSQL: $(head -1 <<< "$out" | cut -c1-120)" || fail "unknown tail: $out"
 # A query that fails inside the report's pipeline (the tail's sessions, then its findings, in one round
 # trip): the server's error comes out whole, the command fails at once (no wait for results that
-# never come), and with the grant back the report is the same as before.
-DB=fleet1 admin -c "REVOKE SELECT ON findings FROM emadiag_station"
+# never come), and with the grant back the report is the same as before. (Schema 5: the report reads
+# a tail's findings from session_findings.)
+DB=fleet1 admin -c "REVOKE SELECT ON session_findings FROM emadiag_station"
 out="$(timeout 60 "$E" report --db "$U" --tail N1EM 2>&1)"; rc=$?
-DB=fleet1 admin -c "GRANT SELECT ON findings TO emadiag_station"
-if [ $rc -ne 0 ] && [ $rc -ne 124 ] && grep -q "permission denied for table findings" <<< "$out" && grep -q "SQLSTATE 42501" <<< "$out"; then
+DB=fleet1 admin -c "GRANT SELECT ON session_findings TO emadiag_station"
+if [ $rc -ne 0 ] && [ $rc -ne 124 ] && grep -q "permission denied for table session_findings" <<< "$out" && grep -q "SQLSTATE 42501" <<< "$out"; then
   pass "an error inside the report's pipeline: exit $rc, $(grep -m1 -o 'fleet server: .*' <<< "$out" | cut -c1-140)"
 else fail "an error inside the report's pipeline: exit $rc: $out"; fi
 same "report N1EM --format json, the findings' grant given back" report --tail N1EM --format json --draws 500
@@ -232,6 +241,28 @@ DB=postgres admin -c "CREATE DATABASE fleet2"
 "$E" sync --db m.db --to "$(uri fleet2 station_c)" > /dev/null || fail "sync m.db to fleet2"
 U="$(uri fleet2 station_c)"
 for t in N1EM N2EM; do LITE=m.db same "report $t, its actuator S-MOVED also on the other tail" report --tail $t --format json --draws 500; done
+
+# Findings added to a session by a later statement (the record allows it, the sync never does it): the
+# server keeps them as a second packed row of the session, and the report reads both in (parameter,
+# estimator) order. The late finding sorts before the session's own FDJ_Nm finding and has another
+# limit: read in the wrong order, the limit of the series and its notes would differ. The same finding
+# added to the station file: the reports are byte for byte the same.
+sim --db d.db --tail N4EM --position LH-ELEV --sessions 5 --seed 11
+DB=postgres admin -c "CREATE DATABASE fleet3"
+"$E" fleet-server --to "$(uri fleet3 fleet_admin)" > /dev/null || fail "fleet-server fleet3"
+"$E" sync --db d.db --to "$(uri fleet3 station_a)" > /dev/null || fail "sync d.db to fleet3"
+late=$(sqlite3 d.db "SELECT min(session_id) + 2 FROM test_sessions")
+late_finding="'FDJ_Nm', 'physics:aaa', 0.09, 0.01, 0.5, 'max', 'WITHIN', 'added later'"
+sqlite3 d.db "INSERT INTO findings(tail_number, session_id, parameter, estimator, value, std_error, limit_value, limit_kind, status, note)
+              VALUES ('N4EM', $late, $late_finding)" || fail "late finding into d.db"
+out="$(psql -X -q -At "$(uri fleet3 station_a)" -c "INSERT INTO findings(tail_number, session_id, parameter, estimator, value, std_error,
+                     limit_value, limit_kind, status, note) SELECT 'N4EM', session_id, $late_finding FROM test_sessions
+                     WHERE station_session_id = $late" 2>&1)"
+rows=$(DB=fleet3 admin -c "SELECT count(*) FROM session_findings p JOIN test_sessions s USING (session_id) WHERE s.station_session_id = $late")
+[ -z "$out" ] && [ "$rows" = 2 ] && pass "a finding added later to session $late: accepted, 2 packed rows for the session" ||
+  fail "a finding added later: '$out', $rows packed rows"
+U="$(uri fleet3 station_a)"
+for fmt in text json; do LITE=d.db same "report N4EM --format $fmt, a finding added later to session $late" report --tail N4EM --format "$fmt" --draws 500; done
 
 # ---- 7. a fleet server at every earlier schema version, with sessions, migrated to the newest ----
 S="$here/../../maintenance_db/pg_schema"

@@ -2,7 +2,7 @@
 # The fleet server at scale: builds the synthetic fleet's station file with fleet_scale_bench
 # (TAILS x 4 positions x 2 sessions/day x DAYS; 1000 730 is the 5.84 million sessions of issue 11),
 # starts a temporary PostgreSQL server (run_pg_tests.sh --run), and runs pg_scale_bench: sync rate,
-# database size, report and fleet times from the server.
+# database size, report and fleet times from the server (in the syncing process, then in a fresh one).
 #   scripts/pg/run_pg_bench.sh [TAILS [DAYS [BUILD_DIR]]]     (defaults 1000 730 build)
 #   PG_BENCH_STATION=FILE: use (a copy of) that station file instead of writing one; PG_BENCH_BATCH: sessions per transaction (default 50000).
 set -euo pipefail
@@ -33,6 +33,8 @@ export PGPASSFILE="$PGWORK/pgpass"; (umask 077; echo "*:*:*:station_bench:$pw" >
 psql -X -q "postgresql:///postgres?host=$PGSOCK&user=fleet_admin" <<< "ALTER ROLE station_bench PASSWORD '$pw'"
 PG_POSTMASTER_PID="$(head -1 "$PGWORK/data/postmaster.pid")" "$build/bench/pg_scale_bench" "$station" "postgresql:///fleet?host=$PGSOCK&user=station_bench" "${PG_BENCH_BATCH:-50000}" F-W0000 \
   "postgresql:///fleet?host=$PGSOCK&user=fleet_admin"
+# The report and fleet again in a fresh process, as `emadiag report` runs (not after a sync in the same process).
+"$build/bench/pg_scale_bench" --reports "postgresql:///fleet?host=$PGSOCK&user=station_bench" F-W0000
 # The server's CPU (its backends, ended by now; the machine may be shared, so wall times also count waiting).
 pm="$(head -1 "$PGWORK/data/postmaster.pid")"
 awk -v hz="$(getconf CLK_TCK)" '{printf "server CPU        : %.1f s (backends, user + system)\n", ($16 + $17) / hz}' "/proc/$pm/stat"

@@ -9,6 +9,8 @@
 # rest of the sync would take (bash's RANDOM, seeded with SEED, printed). After every kill:
 #   - the server holds the station's sessions 1..n and nothing else, each whole: its findings, runs,
 #     samples, raw-log bytes, estimates and artifacts equal the station file's; none twice;
+#   - the report's packed findings (schema 5): one row for each session with findings, equal to them;
+#     its packed sessions (schema 6): one row for each session, equal to it;
 #   - the station's sync record names only sessions the server has, with their fleet ids;
 #   - the station file passes PRAGMA integrity_check.
 # When a sync completed before its kill, the server's copy is emptied and the station's record
@@ -63,6 +65,22 @@ server_detail() {
     FROM test_sessions s WHERE s.station_uuid = '$station_uuid' ORDER BY 1" | tr '|' ' '
 }
 
+# Schema 5: each session with findings has one row of packed findings (the sync adds no findings to a
+# session later), equal to its findings packed anew; no packed row without findings.
+packed_mismatches="SELECT count(*) FROM
+  (SELECT session_id, string_agg(finding_bytes(parameter, estimator, value, std_error, limit_value, limit_kind, status, note), ''::bytea
+                                 ORDER BY parameter, estimator) AS b FROM findings GROUP BY session_id) f
+  FULL JOIN (SELECT session_id, (array_agg(findings))[1] AS b, count(*) AS n FROM session_findings GROUP BY session_id) p USING (session_id)
+  WHERE f.b IS DISTINCT FROM p.b OR p.n <> 1"
+# Schema 6: each session has exactly one packed row, equal to the session packed anew.
+packed_session_mismatches="SELECT count(*) FROM
+  (SELECT tail_number, started_utc, session_id,
+          session_bytes(actuator_serial, phase, tool_version, verdict, verdict_note, position, cycles, hours_h, operator_id, technician_name,
+                        technician_certificate, work_performed, source, amends_session_id, correction_reason, content_sha256) AS b
+   FROM test_sessions) s
+  FULL JOIN (SELECT tail_number, started_utc, session_id, session AS b FROM session_rows) p USING (tail_number, started_utc, session_id)
+  WHERE s.b IS DISTINCT FROM p.b"
+
 # The reference: one whole sync, timed (the kill delays are drawn from this span).
 t0=$(date +%s%N)
 "$E" sync --db k.db --to "$(uri fleetk_ref)" --batch 2 > ref.txt 2>&1 || { cat ref.txt; die "reference sync"; }
@@ -76,8 +94,8 @@ interrupted=0; completed=0; recovered_window=0; resets=0; progress=0; checked=0;
 for i in $(seq 1 "$kills"); do
   have=$(admin -c "SELECT count(*) FROM test_sessions")
   if [ "$have" -ge "$total" ]; then  # all there: start over, so that the next kill lands inside a sync
-    admin -c "TRUNCATE test_sessions, runs, samples, raw_log_chunks, estimates, findings, session_artifacts, installations,
-              session_measurements, series_stats, position_status, discovery_findings" || die "reset"
+    admin -c "TRUNCATE test_sessions, session_rows, runs, samples, raw_log_chunks, estimates, findings, session_findings, session_artifacts,
+              installations, session_measurements, series_stats, position_status, discovery_findings" || die "reset"
     sqlite3 k.db "DELETE FROM synced_sessions; DELETE FROM synced_discovery_findings"
     resets=$((resets + 1)); have=0
   fi
@@ -99,6 +117,10 @@ for i in $(seq 1 "$kills"); do
   [ "$got" = "$want" ] || { diff <(echo "$want") <(echo "$got") | head -5; die "kill $i (after $delay_ms ms, batch $batch): the server's $n sessions are not sessions 1..$n whole"; }
   dup=$(admin -c "SELECT count(*) - count(DISTINCT (station_uuid, station_session_id)) FROM test_sessions")
   [ "$dup" = 0 ] || die "kill $i: $dup sessions twice"
+  packed=$(admin -c "$packed_mismatches")
+  [ "$packed" = 0 ] || die "kill $i: $packed sessions whose packed findings (schema 5) are not their findings, once"
+  packed=$(admin -c "$packed_session_mismatches")
+  [ "$packed" = 0 ] || die "kill $i: $packed sessions whose packed row (schema 6) is not the session, once"
   # The station's record: only sessions the server holds, under the fleet ids the server gave them.
   recorded=$(sqlite3 k.db "SELECT count(*) FROM synced_sessions")
   on_server=$(admin -c "SELECT string_agg(station_session_id || ':' || session_id, ' ' ORDER BY station_session_id) FROM test_sessions")
@@ -117,6 +139,8 @@ cat final.txt
 [ "$(server_detail fleetk)" = "$(station_detail "$total")" ] || die "after the final sync the server is not the station file"
 [ "$(sqlite3 k.db "SELECT count(*) FROM synced_sessions")" = "$total" ] || die "after the final sync the station's record is incomplete"
 [ "$(admin -c "SELECT count(*) - count(DISTINCT station_session_id) FROM test_sessions")" = 0 ] || die "sessions twice after the final sync"
+[ "$(admin -c "$packed_mismatches")" = 0 ] || die "after the final sync, packed findings (schema 5) that are not their sessions' findings, once"
+[ "$(admin -c "$packed_session_mismatches")" = 0 ] || die "after the final sync, packed session rows (schema 6) that are not their sessions, once"
 cmp_ref=$(python3 "$here/compare_summaries.py" k.db "$(uri fleetk)" "$(uri fleetk_ref)") || die "$cmp_ref"
 cmp_station=$(python3 "$here/compare_summaries.py" k.db "$(uri fleetk)") || die "$cmp_station"
 echo "$cmp_ref"

@@ -78,7 +78,9 @@ void fill_trends(HistoryView& v, const std::vector<const db::StoredTestSession*>
         axes.cycle_axis.push_back(total);
     }
     axes.sessions = std::move(picked);
-    for (const char* p : {kParamFdj, kParamFsj, kParamEtaO, kParamEtaA}) v.parameters.push_back(analyse(axes, p, o));
+    std::vector<ParameterHistory> parameters;
+    for (const char* p : {kParamFdj, kParamFsj, kParamEtaO, kParamEtaA}) parameters.push_back(analyse(axes, p, o));
+    v.parameters = SharedList<ParameterHistory>(std::move(parameters));
 }
 
 json optional_number(const std::optional<double>& v) { return v ? json(*v) : json(nullptr); }
@@ -265,7 +267,7 @@ FleetRecord build_fleet_record(db::RecordSource& database, const std::string& ta
                               ", installed now: " + std::to_string(sessions.size() - trend.size()) +
                               " session(s) of earlier serials are in the history only");
         fill_trends(v, trend, options);
-        v.sessions = std::move(sessions);
+        v.sessions = SharedList<db::StoredTestSession>(std::move(sessions));
         r.positions.push_back(std::move(v));
     }
     // Per serial seen on this tail: its whole history on every tail.
@@ -278,7 +280,8 @@ FleetRecord build_fleet_record(db::RecordSource& database, const std::string& ta
         v.installations = database.installations_of_serial(serial);
         const bool only_here = !database.serial_seen_elsewhere(serial, tail_number);
         if (only_here) {
-            // From the positions' sessions: sorted as pointers, each kept session copied once.
+            // From the positions' sessions: sorted as pointers; when they are one position's whole
+            // history, in its order, that list is shared; otherwise each kept session is copied once.
             std::vector<const db::StoredTestSession*> of_serial;
             for (const auto& pv : r.positions)
                 for (const auto& s : pv.sessions)
@@ -288,9 +291,20 @@ FleetRecord build_fleet_record(db::RecordSource& database, const std::string& ta
             });
             for (const auto* s : of_serial)
                 if (s->amends_session_id) amended_here.insert(*s->amends_session_id);
-            sessions.reserve(of_serial.size());
-            for (const auto* s : of_serial)
-                if (!amended_here.count(s->session_id)) sessions.push_back(*s);
+            std::erase_if(of_serial, [&amended_here](const db::StoredTestSession* s) { return amended_here.count(s->session_id) > 0; });
+            for (const auto& pv : r.positions) {
+                if (pv.sessions.size() != of_serial.size()) continue;
+                bool whole = true;
+                for (std::size_t i = 0; i < of_serial.size() && whole; ++i) whole = of_serial[i] == &pv.sessions[i];
+                if (whole) {
+                    v.sessions = pv.sessions;
+                    break;
+                }
+            }
+            if (v.sessions.empty()) {
+                sessions.reserve(of_serial.size());
+                for (const auto* s : of_serial) sessions.push_back(*s);
+            }
         } else {
             std::vector<db::StoredTestSession> of_serial = database.sessions_of_serial(serial, rows_and_findings);
             for (const auto& s : of_serial)
@@ -299,10 +313,12 @@ FleetRecord build_fleet_record(db::RecordSource& database, const std::string& ta
             for (auto& s : of_serial)
                 if (!amended_here.count(s.session_id)) sessions.push_back(std::move(s));
         }
-        v.current_place = sessions.back().tail_number + " " + sessions.back().position.value_or(kNoPosition);
-        v.last_verdict = sessions.back().verdict;
+        if (v.sessions.empty()) v.sessions = SharedList<db::StoredTestSession>(std::move(sessions));
+        const auto& history = v.sessions;
+        v.current_place = history.back().tail_number + " " + history.back().position.value_or(kNoPosition);
+        v.last_verdict = history.back().verdict;
         std::set<std::string> places;
-        for (const auto& s : sessions) places.insert(s.tail_number + " " + s.position.value_or(kNoPosition));
+        for (const auto& s : history) places.insert(s.tail_number + " " + s.position.value_or(kNoPosition));
         if (places.size() > 1) {
             std::string list;
             for (const auto& p : places) list += (list.empty() ? "" : ", ") + p;
@@ -311,7 +327,7 @@ FleetRecord build_fleet_record(db::RecordSource& database, const std::string& ta
         // A serial that never left one position has that position's trends: computed once.
         const HistoryView* same = nullptr;
         std::vector<std::int64_t> ids;
-        for (const auto& s : sessions)
+        for (const auto& s : history)
             if (options.phase == kPhaseAll || s.phase == options.phase) ids.push_back(s.session_id);
         for (const auto& pv : r.positions)
             if (pv.trend_session_ids == ids) same = &pv;
@@ -320,10 +336,9 @@ FleetRecord build_fleet_record(db::RecordSource& database, const std::string& ta
             v.parameters = same->parameters;
         } else {
             std::vector<const db::StoredTestSession*> ptrs;
-            for (const auto& s : sessions) ptrs.push_back(&s);
+            for (const auto& s : history) ptrs.push_back(&s);
             fill_trends(v, ptrs, options);
         }
-        v.sessions = std::move(sessions);
         r.serials.push_back(std::move(v));
     }
     return r;

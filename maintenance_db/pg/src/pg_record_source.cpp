@@ -2,6 +2,8 @@
 #include "emadiag/db/pg_fleet.hpp"
 
 #include <algorithm>
+#include <bit>
+#include <cstdint>
 #include <charconv>
 #include <limits>
 #include <map>
@@ -94,6 +96,106 @@ StoredInstallation read_installation(const Row& r) {
     return i;
 }
 
+/// Reads the packed rows of schemas 5 and 6 (pg_schema/005_report_findings.sql, 006_report_sessions.sql):
+/// a text is its length (int4, big-endian) and its bytes; a number or a bigint is a byte 0 (NULL) or 1
+/// and its 8 bytes, big-endian (float8send, int8send: the stored value, bit for bit). Throws DbError
+/// naming what was read and the byte where the row stops making sense.
+class PackedReader {
+public:
+    PackedReader(std::string_view bytes, std::string what) : bytes_(bytes), what_(std::move(what)) {}
+    [[nodiscard]] bool done() const { return at_ == bytes_.size(); }
+    void text(std::string& out) {
+        const auto n = static_cast<std::size_t>(big_endian(4, "a text's length cut short"));
+        if (bytes_.size() - at_ < n) throw bad("a text longer than the row");
+        out.assign(bytes_.substr(at_, n));
+        at_ += n;
+    }
+    void text(std::optional<std::string>& out) {
+        if (flag()) text(out.emplace());
+    }
+    void number(std::optional<double>& out) {
+        if (flag()) out = std::bit_cast<double>(big_endian(8, "a float8 cut short"));
+    }
+    void integer(std::optional<std::int64_t>& out) {
+        if (flag()) out = static_cast<std::int64_t>(big_endian(8, "an int8 cut short"));
+    }
+    /// Throws unless every byte was read.
+    void finish() const {
+        if (!done()) throw bad("bytes left over");
+    }
+
+private:
+    [[nodiscard]] DbError bad(const char* what) const {
+        return DbError(what_ + " (" + std::to_string(bytes_.size()) + " bytes) is damaged: " + what + " at byte " + std::to_string(at_),
+                       DbErrorKind::Invalid);
+    }
+    std::uint64_t big_endian(std::size_t n, const char* what) {
+        if (bytes_.size() - at_ < n) throw bad(what);
+        std::uint64_t v = 0;
+        for (std::size_t i = 0; i < n; ++i) v = (v << 8) | static_cast<unsigned char>(bytes_[at_ + i]);
+        at_ += n;
+        return v;
+    }
+    bool flag() {
+        const auto f = big_endian(1, "a NULL flag cut short");
+        if (f > 1) throw bad("a NULL flag neither 0 nor 1");
+        return f == 1;
+    }
+    std::string_view bytes_;
+    std::string what_;
+    std::size_t at_ = 0;
+};
+
+/// The findings of one row of session_findings (schema 5), appended to `to`.
+void unpack_findings(std::string_view bytes, std::int64_t session_id, const std::string& uri, std::vector<StoredFinding>& to) {
+    PackedReader in(bytes, "fleet server " + uri + ": the packed findings of session " + std::to_string(session_id));
+    while (!in.done()) {
+        StoredFinding& f = to.emplace_back();
+        in.text(f.parameter);
+        in.text(f.estimator);
+        in.number(f.value);
+        in.number(f.std_error);
+        in.number(f.limit_value);
+        in.text(f.limit_kind);
+        in.text(f.status);
+        in.text(f.note);
+    }
+}
+
+/// One row of session_rows (schema 6): the columns a report reads, without the limits text, its
+/// hash and the chain link (empty, as with SessionListParts::limits_and_links false).
+StoredTestSession unpack_session(const Row& r, const std::string& tail, const PgPlaces& places, const std::string& uri) {
+    StoredTestSession s;
+    s.session_id = int_of(r, 0);
+    s.tail_number = tail;
+    s.started_utc = text(r, 1);
+    PackedReader in(r.text(2), "fleet server " + uri + ": the packed row of session " + std::to_string(s.session_id));
+    in.text(s.actuator_serial);
+    in.text(s.phase);
+    in.text(s.tool_version);
+    in.text(s.verdict);
+    in.text(s.verdict_note);
+    in.text(s.position);
+    if (s.position) {
+        if (const auto it = places.find(*s.position); it != places.end()) {
+            s.position_ata = it->second.first;
+            s.position_description = it->second.second;
+        }
+    }
+    in.integer(s.cycles);
+    in.number(s.hours_h);
+    in.text(s.operator_id);
+    in.text(s.technician_name);
+    in.text(s.technician_certificate);
+    in.text(s.work_performed);
+    in.text(s.source);
+    in.integer(s.amends_session_id);
+    in.text(s.correction_reason);
+    in.text(s.content_sha256);
+    in.finish();
+    return s;
+}
+
 }  // namespace
 
 PgRecordSource::PgRecordSource(const std::string& uri) : pg_(uri) {
@@ -103,7 +205,11 @@ PgRecordSource::PgRecordSource(const std::string& uri) : pg_(uri) {
                       DbErrorKind::Invalid);
     // One snapshot for the whole report: a sync committing meanwhile shows entirely or not at all.
     pg_.exec("BEGIN ISOLATION LEVEL REPEATABLE READ READ ONLY");
-    schema_version_ = std::stoi(pg_.query("SELECT coalesce(max(version), 0) FROM fleet_schema_version").at(0).at(0).value_or("0"));
+    const auto v5 = pg_.query("SELECT coalesce(max(version), 0), current_setting('client_encoding') = current_setting('server_encoding') "
+                              "FROM fleet_schema_version");
+    schema_version_ = std::stoi(v5.at(0).at(0).value_or("0"));
+    // The packed rows hold their texts in the server's encoding; the rows of a query come in the client's.
+    same_encoding_ = v5.at(0).at(1) == std::optional<std::string>("t");
 }
 
 std::vector<std::string> PgRecordSource::tail_numbers() {
@@ -172,21 +278,55 @@ std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string&
     // tail's heap pages were read at random: they lie together (the sync groups a batch by tail) and a
     // fleet server keeps them cached (50 x 730 fleet, 5,840 sessions: 3.4 ms against 5.8 ms, and the
     // first row only after the sort). Bitmap scans are off for this one statement, in the same round trip.
+    // Schema 6: the columns a report reads of each session, packed in one value (session_rows), in the
+    // order of its index (tail_number, started_utc, session_id). Its rows lie in a few runs per tail (one
+    // per sync batch) but the planner costs them as scattered, and with bitmap scans off it chose a
+    // sequential scan of the whole table (50 x 730: 50.6 ms, against 1.9 ms for the index scan and
+    // 4.7 ms for a bitmap scan and a sort): both are off for that statement.
+    const bool packed_sessions = by_tail && schema_version_ >= 6 && same_encoding_ && !parts.limits_and_links;
     if (by_tail) queries.push_back({"SET LOCAL enable_bitmapscan = off", {}, false, {}});
-    queries.push_back({"SELECT " + session_select(columns) + " WHERE " + where + " ORDER BY s.started_utc, s.session_id", {value}, true,
-                       [&](const Row& r) {
+    if (packed_sessions) queries.push_back({"SET LOCAL enable_seqscan = off", {}, false, {}});
+    queries.push_back({packed_sessions ? "SELECT r.session_id, r.started_utc, r.session FROM session_rows r WHERE r.tail_number = $1 "
+                                         "ORDER BY r.started_utc, r.session_id"
+                                       : "SELECT " + session_select(columns) + " WHERE " + where + " ORDER BY s.started_utc, s.session_id",
+                       {value}, true, [&](const Row& r) {
                            if (r.row() == 0) {
                                out.reserve(static_cast<std::size_t>(r.row_count()));
                                index.reserve(static_cast<std::size_t>(r.row_count()));
                            }
-                           out.push_back(read_session(r, columns, value, *places));
+                           out.push_back(packed_sessions ? unpack_session(r, value, *places, pg_.uri()) : read_session(r, columns, value, *places));
                            index[out.back().session_id] = out.size() - 1;
                        }});
     if (by_tail) queries.push_back({"RESET enable_bitmapscan", {}, false, {}});
+    if (packed_sessions) queries.push_back({"RESET enable_seqscan", {}, false, {}});
     // Both in the binary format: the numbers come as their bytes (no text to print and parse).
-    if (schema_version_ >= 3 && by_tail) {
-        // A tail's findings on schema 3: one range of the index (tail_number, session_id, parameter, estimator)
-        // that holds every column the report reads (an index-only scan once vacuum has marked the pages).
+    if (schema_version_ >= 5 && same_encoding_ && by_tail) {
+        // A tail's findings on schema 5: one row per session (session_findings), one range of its index;
+        // both queries at once, as below. A session with findings added by a later statement has a
+        // row for each: its findings are then put back in (parameter, estimator) order.
+        std::vector<std::size_t> merged;
+        queries.push_back({"SELECT p.session_id, p.findings FROM session_findings p WHERE p.tail_number = $1 ORDER BY p.session_id", {value}, true,
+                           [&](const Row& r) {
+                               const std::int64_t session_id = int_of(r, 0);
+                               const auto it = index.find(session_id);
+                               if (it == index.end())
+                                   throw DbError("fleet server " + pg_.uri() + ": findings of session " + std::to_string(session_id) +
+                                                 " are not among the sessions where " + where + " ($1 = " + value + ")");
+                               auto& findings = out[it->second].findings;
+                               if (!findings.empty()) merged.push_back(it->second);
+                               unpack_findings(r.text(1), session_id, pg_.uri(), findings);
+                           }});
+        pg_.each_row(queries);
+        keep_places();
+        for (const std::size_t i : merged)
+            std::sort(out[i].findings.begin(), out[i].findings.end(), [](const StoredFinding& a, const StoredFinding& b) {
+                return std::tie(a.parameter, a.estimator) < std::tie(b.parameter, b.estimator);
+            });
+    } else if (schema_version_ >= 3 && by_tail) {
+        // A tail's findings on schema 3: one range of the index (tail_number, session_id, parameter, estimator),
+        // which on schemas 3 to 6 also holds every column the report reads (an index-only scan once vacuum
+        // has marked the pages; schema 7 leaves them to the table: on schema 5 and later this path serves
+        // only a client whose encoding differs from the server's).
         // They do not depend on the sessions' rows, so both queries go at once (pipeline mode): the
         // server looks up the findings while the sessions are read here.
         queries.push_back({findings_sql + "f.tail_number = $1" + findings_order, {value}, true, read_finding});

@@ -140,6 +140,9 @@ private:
     std::vector<StoredTestSession> sessions_where(const std::string& where, const std::string& value, const SessionListParts& parts, bool by_tail);
     PgConnection pg_;
     int schema_version_ = 0;
+    /// Client and server encodings agree: the packed rows of schemas 5 and 6 (texts in the server's
+    /// encoding) read as the columns would.
+    bool same_encoding_ = false;
     /// The positions' ATA reference and description (position -> both), read once in the snapshot.
     std::optional<std::map<std::string, std::pair<std::string, std::string>>> places_;
 };
