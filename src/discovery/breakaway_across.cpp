@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <optional>
 
 namespace emadiag::discovery {
@@ -55,6 +56,12 @@ constexpr Probe kProbes[] = {{sim::TermTarget::Torque, 0.005},
                              {sim::TermTarget::Hinge, 2.0},
                              {sim::TermTarget::Current, 0.02},
                              {sim::TermTarget::Theta, 0.002}};
+
+/// A torque term that acts at rest: no factor of the speed.
+bool acts_at_rest(const sim::Term& t) {
+    return t.target == sim::TermTarget::Torque &&
+           std::none_of(t.factors.begin(), t.factors.end(), [](const sim::TermFactor& f) { return f.signal == sim::TermSignal::Speed; });
+}
 
 sim::Term constant_term(sim::TermTarget target, double coefficient, double se = 0) {
     sim::Term t;
@@ -123,18 +130,10 @@ BreakawayAcross breakaway_across(const Run& brk, const std::string& brk_label, c
     // DYN run, whose trajectory preferred it, 2.16 against 2.92, fitted on the torque residual). The
     // candidates are also tried in their place, sized against the model without them.
     std::vector<sim::Term> rest_terms;
-    for (const auto& t : p.terms) {
-        const bool moving = std::any_of(t.factors.begin(), t.factors.end(),
-                                        [](const sim::TermFactor& f) { return f.signal == sim::TermSignal::Speed; });
-        if (t.target == sim::TermTarget::Torque && !moving) rest_terms.push_back(t);
-    }
+    std::copy_if(p.terms.begin(), p.terms.end(), std::back_inserter(rest_terms), acts_at_rest);
     if (!rest_terms.empty()) {
         sim::EmaParams bare = p;
-        std::erase_if(bare.terms, [](const sim::Term& t) {
-            return t.target == sim::TermTarget::Torque && std::none_of(t.factors.begin(), t.factors.end(), [](const sim::TermFactor& f) {
-                       return f.signal == sim::TermSignal::Speed;
-                   });
-        });
+        std::erase_if(bare.terms, acts_at_rest);
         batch.push_back(bare);
     }
     const std::vector<Run> sims = resimulate_many(brk, batch);
@@ -223,11 +222,7 @@ BreakawayAcross breakaway_across(const Run& brk, const std::string& brk_label, c
     for (auto& h : out.hypotheses) {
         sim::EmaParams q = dyn_p;
         if (!h.replaces.empty()) {
-            std::erase_if(q.terms, [&](const sim::Term& t) {
-                return std::any_of(rest_terms.begin(), rest_terms.end(), [&](const sim::Term& r) {
-                    return r.target == t.target && r.basis_text() == t.basis_text();
-                });
-            });
+            std::erase_if(q.terms, acts_at_rest);  // the DYN model's torque terms are p's
         }
         q.terms.push_back(h.term);
         const FitResult f = refit(q);
