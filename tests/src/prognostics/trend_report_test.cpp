@@ -58,7 +58,8 @@ void store_history(db::Database& database, const std::string& tail, int sessions
     }
 }
 
-const TrendSeries& only_series(const TrendReport& r) {
+/// The one series of a report (a copy: the report is often a temporary).
+TrendSeries only_series(const TrendReport& r) {
     EXPECT_EQ(r.series.size(), 1u);
     return r.series.at(0);
 }
@@ -68,7 +69,7 @@ TEST(TrendReport, PredictsTheCrossingOfAnExactDriftFromTheDatabase) {
     store_history(database, "N123EM", 8, false);
     const TrendReport r = load_trend_report(database, "N123EM", {});
     EXPECT_EQ(r.sessions_total, 8);
-    const TrendSeries& t = only_series(r);
+    const TrendSeries t = only_series(r);
     EXPECT_EQ(t.kind, "position");
     EXPECT_EQ(t.position, "(none)");  // stored without a position: named so, not "ALL"
     EXPECT_EQ(t.sessions_in_trend, 8);
@@ -92,7 +93,7 @@ TEST(TrendReport, ThePhaseFilterPicksTheSessionsOfTheTrend) {
     o.phase = "post-flight";
     const TrendReport r = load_trend_report(database, "N123EM", o);
     EXPECT_EQ(r.sessions_total, 8);
-    const TrendSeries& t = only_series(r);
+    const TrendSeries t = only_series(r);
     EXPECT_EQ(t.sessions_total, 8);
     EXPECT_EQ(t.sessions_in_trend, 4);
     EXPECT_THAT(t.notes, ElementsAre(HasSubstr("4 session(s) of another phase than post-flight left out of the trends")));
@@ -132,7 +133,7 @@ TEST(TrendReport, EachPositionIsItsOwnSeriesNeverPooled) {
     EXPECT_EQ(only_series(load_trend_report(database, "N456EM", o)).serial, "SN-R");
     o.position.clear();
     o.serial = "SN-L";
-    const TrendSeries& l = only_series(load_trend_report(database, "N456EM", o));
+    const TrendSeries l = only_series(load_trend_report(database, "N456EM", o));
     EXPECT_EQ(l.kind, "serial");
     EXPECT_EQ(l.place, "N456EM LH-ELEV");
     EXPECT_NEAR(*l.parameters[0].rul.crossing_t_days, 400.0, kDayTolerance);
@@ -144,7 +145,7 @@ TEST(TrendReport, ASerialChangeAtAPositionStartsANewSeries) {
     db::Database database(":memory:");
     store_history(database, "N77EM", 6, false, "LH-ELEV", "SN-OLD", 4e-5, 0, 0.085);
     store_history(database, "N77EM", 6, false, "LH-ELEV", "SN-NEW", 4e-5, 6, 0.08 - 4e-5 * 180.0);
-    const TrendSeries& t = only_series(load_trend_report(database, "N77EM", {}));
+    const TrendSeries t = only_series(load_trend_report(database, "N77EM", {}));
     EXPECT_EQ(t.serial, "SN-NEW");
     EXPECT_EQ(t.sessions_total, 12);
     EXPECT_EQ(t.sessions_in_trend, 6);
@@ -156,7 +157,7 @@ TEST(TrendReport, ASerialChangeAtAPositionStartsANewSeries) {
     EXPECT_NEAR(*p.rul.crossing_t_days, 400.0, kDayTolerance);  // 0.080 + 4e-5 t = 0.096 at the new actuator's day 400
     TrendOptions o;
     o.serial = "SN-OLD";
-    const TrendSeries& old = only_series(load_trend_report(database, "N77EM", o));
+    const TrendSeries old = only_series(load_trend_report(database, "N77EM", o));
     ASSERT_EQ(old.parameters[0].series.points.size(), 6u);
     EXPECT_NEAR(*old.parameters[0].trend_per_period, 0.004, 1e-12);
     EXPECT_NEAR(*old.parameters[0].rul.crossing_t_days, 275.0, kDayTolerance);  // 0.085 + 4e-5 t = 0.096
