@@ -311,3 +311,27 @@ TEST_F(HostileValidityCli, DiscoverTakesOneActuatorsRunsAndRefusesAForeignRun) {
     db::Database database(p("m.db"));
     EXPECT_TRUE(db::list_discovery_findings(database, "N21EM").empty());
 }
+
+TEST_F(HostileValidityCli, DiscoverStoresTheFindingUnderThePositionAndSerialOfItsRuns) {
+    const std::string run = simulated_csv("run.csv");
+    ASSERT_EQ(run_cli(import(run, "--serial SN-1")).exit_code, 0);
+    // Another actuator of the same tail, and a replacement at the same position later.
+    ASSERT_EQ(run_cli("import " + run + " --db " + p("m.db") + " --tail N21EM --position RH-ELEV --utc 2026-11-27T13:00:00Z --serial SN-2")
+                  .exit_code,
+              0);
+    auto r = run_cli("discover --db " + p("m.db") + " --tail N21EM --position LH-ELEV");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_THAT(r.output, AllOf(HasSubstr("finding stored as discovery finding 1 of N21EM LH-ELEV serial SN-1"), HasSubstr("run run 1 ")));
+    EXPECT_THAT(r.output, Not(HasSubstr("run run 2 ")));
+    ASSERT_EQ(run_cli("import " + run + " --db " + p("m.db") + " --tail N21EM --position LH-ELEV --utc 2026-11-28T12:00:00Z --serial SN-3")
+                  .exit_code,
+              0);
+    r = run_cli("discover --db " + p("m.db") + " --tail N21EM --position LH-ELEV");
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_THAT(r.output, HasSubstr("position LH-ELEV of N21EM held 2 actuators (serials SN-1, SN-3); give --serial SN"));
+    db::Database database(p("m.db"));
+    const auto findings = db::list_discovery_findings(database, "N21EM");
+    ASSERT_EQ(findings.size(), 1u);
+    EXPECT_EQ(findings[0].position.value_or(""), "LH-ELEV");
+    EXPECT_EQ(findings[0].actuator_serial, "SN-1");
+}
