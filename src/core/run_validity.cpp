@@ -95,24 +95,27 @@ RunValidity run_validity(const Run& run) {
     }
     if (auto p = metadata_value_problem("case", run.load_case)) return invalid(*p);
     if (auto p = metadata_value_problem("sequence", run.sequence)) return invalid(*p);
+    // Every reason that holds, so a truncated log marked incomplete says both.
+    std::vector<std::string> reasons;
     if (run.meta_value("valid").value_or("true") != "true") {
         const std::string why = run.meta_value("invalid_reason").value_or("");
-        return invalid("its metadata says valid=false" + (why.empty() ? std::string() : " (" + why + ")"));
+        reasons.push_back("its metadata says valid=false" + (why.empty() ? std::string() : " (" + why + ")"));
     }
     const std::string status = run.meta_value("status").value_or("complete");
-    if (status != "complete") return invalid("its metadata says status=" + status + ": the " + run.sequence + " sequence did not complete");
-    if (run.samples.empty()) return invalid("the run has no samples");
+    if (status != "complete" && run.meta_value("invalid_reason").value_or("") != "sequence " + status)
+        reasons.push_back("its metadata says status=" + status + ": the " + run.sequence + " sequence did not complete");
+    if (run.samples.empty()) reasons.push_back("the run has no samples");
 
     // Complete: the samples reach the end of the sequence.
     const double period_s = run.constants.sample_period_s;
     const double duration_s = sim::default_duration_s(sim::parse_sequence(run.sequence));
-    if (std::isfinite(period_s) && period_s > 0) {
+    if (!run.samples.empty() && std::isfinite(period_s) && period_s > 0) {
         const double last_t_s = run.samples.back().t_s;
         if (!(last_t_s >= duration_s - kRunEndToleranceSamples * period_s)) {
             const auto expected = static_cast<long long>(std::llround(duration_s / period_s));
-            return invalid("truncated: " + std::to_string(run.samples.size()) + " of " + std::to_string(expected) +
-                           " samples, the last at t = " + num(last_t_s) + " s; the " + run.sequence + " sequence lasts " +
-                           num(duration_s) + " s");
+            reasons.push_back("truncated: " + std::to_string(run.samples.size()) + " of " + std::to_string(expected) +
+                              " samples, the last at t = " + num(last_t_s) + " s; the " + run.sequence + " sequence lasts " +
+                              num(duration_s) + " s");
         }
     }
     // Physically possible: a value beyond the datasheet by kImpossibleMargin is no measurement.
@@ -123,10 +126,20 @@ RunValidity run_validity(const Run& run) {
                                                        {"theta_m_rad", s.theta_m_rad},
                                                        {"hinge_moment_Nm", s.hinge_moment_nm},
                                                        {"command_deg", s.command_deg}};
-        for (const auto& [name, value] : cols)
-            if (auto p = sample_value_problem(name, value)) return invalid("sample " + std::to_string(i + 1) + ": " + *p);
+        bool found = false;
+        for (const auto& [name, value] : cols) {
+            if (auto p = sample_value_problem(name, value)) {
+                reasons.push_back("sample " + std::to_string(i + 1) + ": " + *p);
+                found = true;
+                break;
+            }
+        }
+        if (found) break;  // the first one names the problem
     }
-    return {};
+    if (reasons.empty()) return {};
+    std::string all;
+    for (const auto& r : reasons) all += (all.empty() ? "" : "; ") + r;
+    return invalid(all);
 }
 
 }  // namespace emadiag

@@ -1,16 +1,16 @@
 #pragma once
 // Whether a run may give a verdict (issue 21 item 2), decided here and nowhere else: only a
-// complete, valid run may. Every source that makes a Run (run CSV, candump log, recorder, spool)
-// and every consumer that judges one (import, estimate, the stored record) reads run_validity().
+// complete, valid run may. The sources (run CSV, candump log, recorder) record what they saw in
+// the metadata; every consumer that judges a run (import, estimate, the verdict of test-run and
+// recover, the stored record's valid flag) reads run_validity().
 //
 // A run is NOT valid when any of these holds, and the reason says which:
 //   - its metadata says valid=false (with its invalid_reason, e.g. "sequence incomplete");
 //   - its metadata says status=aborted or status=incomplete;
-//   - a candump log's samples_expected (max of the EMA's SamplesSent and the highest index) is
-//     below the sequence's length, or its samples cover less than it;
 //   - its samples end before the sequence does (sim::default_duration_s: DYN and SWEEP 0.5 s,
 //     BRK 0.8 s), by more than kRunEndToleranceSamples sample periods: a truncated file;
 //   - a sample holds a physically impossible value (sample_value_problem below).
+// The reason lists every one of these that holds ("; "-separated), the first impossible sample only.
 // The data of an invalid run is kept (import stores it with valid=false and the reason; estimate
 // may print estimates with a warning), but no verdict is given: NO_TEST.
 #include "core/run.hpp"
