@@ -21,8 +21,8 @@ inline constexpr int kMaxJsonDepth = 64;
 /// Largest JSON file accepted (the shipped network models are about 0.55 MB).
 inline constexpr std::size_t kMaxJsonBytes = std::size_t{16} << 20;
 
-/// Parses `text`; on failure returns nullopt with the reason (the limit by name, or the parser's
-/// message with its byte position) in `error`.
+/// Parses `text`; on failure returns nullopt with the reason (the limit by name, the parser's
+/// message with its byte position, or a key repeated in one object with the object's path) in `error`.
 [[nodiscard]] inline std::optional<nlohmann::json> parse_bounded_json(std::string_view text, std::string& error) {
     if (text.size() > kMaxJsonBytes) {
         error = "JSON text of " + std::to_string(text.size()) + " bytes exceeds the limit kMaxJsonBytes = " +
