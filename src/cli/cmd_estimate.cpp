@@ -161,6 +161,10 @@ const bool registered = register_command(Command{
                                          std::to_string(*line) + ", so sample row N is line N + " +
                                          std::to_string(*line - 1) + ")");
             }
+            // Only a complete, valid run may give a verdict (core/run_validity.hpp): estimates of any
+            // other are printed with a warning on both streams (stderr first, before anything can fail).
+            const RunValidity validity = run_validity(run);
+            if (!validity.valid) std::cerr << "emadiag estimate: " << invalid_warning(validity) << '\n';
             std::optional<std::string> network_model = model->empty() ? std::nullopt : std::optional<std::string>(*model);
             std::optional<Run> corrected;
             std::string model_note;
@@ -190,10 +194,6 @@ const bool registered = register_command(Command{
                 out.model_files.insert(out.model_files.begin(), *model);
                 out.notes.insert(out.notes.begin(), model_note);
             }
-            // Only a complete, valid run may give a verdict (core/run_validity.hpp): estimates of any
-            // other are printed with a warning on both streams.
-            const RunValidity validity = run_validity(run);
-            if (!validity.valid) std::cerr << "emadiag estimate: " << invalid_warning(validity) << '\n';
             if (*json) std::cout << to_json(*path, run, validity, out).dump(2) << '\n';
             else print_text(std::cout, *path, run, validity, out);
             return 0;
