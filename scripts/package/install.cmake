@@ -4,7 +4,7 @@
 # Layout (GNUInstallDirs; the package uses the prefix /usr):
 #   bin/emadiag                                  the tool; it finds its data from its own location
 #   share/emadiag/models/*.json                  the shipped network models
-#   share/emadiag/can_dbc/ema.dbc, ICD.md        the EMA's CAN interface
+#   share/emadiag/can_dbc/ema.dbc                the EMA's CAN interface (its ICD: share/doc/emadiag/can-icd.md)
 #   share/emadiag/actuators/                     actuator profiles (when the source tree has them)
 #   share/doc/emadiag/                           README, docs/, copyright, changelog.gz
 #   share/man/man1/emadiag.1.gz, emadiag-*.1.gz  manual pages, generated from the CLI's definitions
@@ -21,7 +21,8 @@ set(CMAKE_INSTALL_DEFAULT_DIRECTORY_PERMISSIONS OWNER_READ OWNER_WRITE OWNER_EXE
 set(EMADIAG_PKG_DIR ${PROJECT_SOURCE_DIR}/scripts/package)
 install(TARGETS emadiag RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/models/ DESTINATION ${CMAKE_INSTALL_DATADIR}/emadiag/models FILES_MATCHING PATTERN "*.json")
-install(FILES ${PROJECT_SOURCE_DIR}/can_dbc/ema.dbc ${PROJECT_SOURCE_DIR}/can_dbc/ICD.md DESTINATION ${CMAKE_INSTALL_DATADIR}/emadiag/can_dbc)
+install(FILES ${PROJECT_SOURCE_DIR}/can_dbc/ema.dbc DESTINATION ${CMAKE_INSTALL_DATADIR}/emadiag/can_dbc)
+install(FILES ${PROJECT_SOURCE_DIR}/can_dbc/ICD.md DESTINATION ${CMAKE_INSTALL_DOCDIR} RENAME can-icd.md)
 if(EXISTS ${PROJECT_SOURCE_DIR}/actuators)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/actuators/ DESTINATION ${CMAKE_INSTALL_DATADIR}/emadiag/actuators)
 endif()
@@ -32,6 +33,7 @@ install(FILES ${PROJECT_SOURCE_DIR}/models/README.md DESTINATION ${CMAKE_INSTALL
 install(FILES ${EMADIAG_DOC_FILES} DESTINATION ${CMAKE_INSTALL_DOCDIR}/docs)
 # The changelog, compressed as Debian wants it (gzip -9n: no name, no time stamp, so reproducible).
 set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS ${EMADIAG_PKG_DIR}/changelog)
+file(MAKE_DIRECTORY ${PROJECT_BINARY_DIR}/package)
 execute_process(COMMAND gzip -9n -c ${EMADIAG_PKG_DIR}/changelog OUTPUT_FILE ${PROJECT_BINARY_DIR}/package/changelog.gz)
 install(FILES ${PROJECT_BINARY_DIR}/package/changelog.gz DESTINATION ${CMAKE_INSTALL_DOCDIR})
 
@@ -39,9 +41,10 @@ install(DIRECTORY ${EMADIAG_DOCS_DIR}/man1/ DESTINATION ${CMAKE_INSTALL_MANDIR}/
 install(FILES ${EMADIAG_DOCS_DIR}/completion/emadiag DESTINATION ${CMAKE_INSTALL_DATADIR}/bash-completion/completions)
 install(FILES ${EMADIAG_DOCS_DIR}/completion/_emadiag DESTINATION ${CMAKE_INSTALL_DATADIR}/zsh/vendor-completions)
 
-install(PROGRAMS ${PROJECT_SOURCE_DIR}/scripts/vcan/with_vcan.sh ${PROJECT_SOURCE_DIR}/scripts/vcan/guest_priority.sh
-                 ${PROJECT_SOURCE_DIR}/scripts/vcan/with_vcan_vm.sh ${PROJECT_SOURCE_DIR}/scripts/test-run-demo.sh
+install(PROGRAMS ${PROJECT_SOURCE_DIR}/scripts/vcan/with_vcan.sh ${PROJECT_SOURCE_DIR}/scripts/vcan/with_vcan_vm.sh
+                 ${PROJECT_SOURCE_DIR}/scripts/test-run-demo.sh
         DESTINATION ${CMAKE_INSTALL_LIBEXECDIR}/emadiag)
+install(FILES ${PROJECT_SOURCE_DIR}/scripts/vcan/guest_priority.sh DESTINATION ${CMAKE_INSTALL_LIBEXECDIR}/emadiag)  # sourced, not run
 
 # The Debian package: CPack's DEB generator (why not debhelper: docs/install.md).
 set(CPACK_GENERATOR DEB)
@@ -51,8 +54,8 @@ set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
 set(CPACK_PACKAGE_CONTACT "emadiag maintainers <emadiag-maintainers@emadiag.org>")
 set(CPACK_DEBIAN_PACKAGE_MAINTAINER "emadiag maintainers <emadiag-maintainers@emadiag.org>")
 set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "ground-maintenance diagnostics for flight-control actuators")
-set(CPACK_DEBIAN_PACKAGE_DESCRIPTION "ground-maintenance diagnostics for flight-control actuators
- emadiag runs a test sequence on an electromechanical flight-control actuator
+# CPack writes the summary as the synopsis line; this is the extended description below it.
+set(CPACK_DEBIAN_PACKAGE_DESCRIPTION "emadiag runs a test sequence on an electromechanical flight-control actuator
  over its CAN bus, reconstructs the residual torque and estimates the health
  of its transmission (dry friction and efficiencies), gives a verdict and
  stores the session in a tamper-evident maintenance record (SQLite, or a

@@ -78,7 +78,7 @@ std::string days(const std::optional<double>& v) {
 std::string status_class(const pg::FleetRow& r) {
     if (r.status == "limit exceeded") return "bad";
     if (r.status == "crossing predicted") return "warn";
-    if (r.status == "no crossing") return "ok";
+    if (r.status == "no crossing within the horizon") return "ok";
     return "none";
 }
 
