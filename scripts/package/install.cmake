@@ -69,9 +69,9 @@ set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)  # emadiag_<version>_amd64.deb
 # libgcc-s1, libsqlite3-0, libhwy1, libpq5). libpq5 is among them: the one binary links it for
 # `sync` and --db postgresql://; the PostgreSQL server and psql are only suggested.
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
-# Recommends: what the vcan helper (libexec/emadiag/with_vcan.sh) needs on a kernel without vcan;
+# Recommends: bash-completion (loads the completion script), and what the vcan helper (libexec/emadiag/with_vcan.sh) needs on a kernel without vcan;
 # a station with a real CAN interface does without (apt-get --no-install-recommends).
-set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "user-mode-linux, iproute2, kmod")
+set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "bash-completion, user-mode-linux, iproute2, kmod")
 set(CPACK_DEBIAN_PACKAGE_SUGGESTS "postgresql-client, can-utils, chromium, qemu-system-x86, linux-image-amd64, busybox-static")
 set(CPACK_STRIP_FILES ON)
 set(CPACK_DEBIAN_PACKAGE_CONTROL_STRICT_PERMISSION ON)

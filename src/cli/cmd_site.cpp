@@ -90,6 +90,7 @@ h2 { font-size: 18px; border-bottom: 2px solid #34495e; padding-bottom: 2px; mar
 table { border-collapse: collapse; margin: 8px 0; }
 th, td { border: 1px solid #ccc; padding: 3px 8px; text-align: left; }
 th { background: #ecf0f1; }
+td { white-space: nowrap; }
 td.num { text-align: right; }
 span.st { padding: 1px 6px; border-radius: 3px; color: #fff; }
 span.bad { background: #c0392b; } span.warn { background: #d68910; } span.ok { background: #1e8449; } span.none { background: #7f8c8d; }
