@@ -84,8 +84,7 @@ std::string version_text() {
     os << "models:         ";
     if (models.empty()) os << "none found (not installed, not in a build tree; set " << kModelsDirEnvVar << " or give --models DIR)";
     for (std::size_t i = 0; i < models.size(); ++i) os << (i ? "; then " : "") << models[i].dir.string() << " (" << models[i].how << ")";
-    os << '\n';
-    return os.str();
+    return os.str();  // CLI11 ends the --version output with its own newline
 }
 
 void apply_models_override(const std::string& models_option) {

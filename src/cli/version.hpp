@@ -21,7 +21,7 @@ extern const char* const kBuildType;       ///< CMAKE_BUILD_TYPE
 [[nodiscard]] const std::string& tool_version();
 
 /// The text of `emadiag --version`: the release, the git description, the build type, the build id,
-/// the SIMD targets compiled in and the one this CPU runs, and where the data are looked for.
+/// the SIMD targets compiled in and the one this CPU runs, and where the data are looked for (no final newline).
 [[nodiscard]] std::string version_text();
 
 /// The models folder chosen explicitly: `--models DIR` (given: it sets EMADIAG_MODELS_DIR) or the

@@ -2,6 +2,7 @@
 // did not write, a symbolic link or a file is refused and left as it was; an earlier site is replaced
 // whole. Hostile tail names: hostile_site_file_name_test.cpp (the database refuses them before). The browser check is scripts/report/site_browser_check.sh.
 #include "support/cli_runner.hpp"
+#include "support/db_test_files.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -21,12 +22,7 @@ using ::testing::Not;
 namespace fs = std::filesystem;
 using emadiag::test::run_cli;
 
-std::string read(const fs::path& p) {
-    std::ifstream in(p);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
+std::string read(const fs::path& p) { return emadiag::test::read_text_file(p.string()); }
 
 class HostileSiteCli : public ::testing::Test {
 protected:

@@ -4,6 +4,7 @@
 // own definitions, and where the shipped models are found (never ./models; --models and
 // EMADIAG_MODELS_DIR override and say so).
 #include "support/cli_runner.hpp"
+#include "support/db_test_files.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -24,12 +25,7 @@ using ::testing::StartsWith;
 namespace fs = std::filesystem;
 using emadiag::test::run_cli;
 
-std::string read(const fs::path& p) {
-    std::ifstream in(p);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
+std::string read(const fs::path& p) { return emadiag::test::read_text_file(p.string()); }
 
 /// The first line of --version: "emadiag 0.1.0"; the stored version starts with the release.
 std::string release() {
