@@ -12,6 +12,7 @@ PACKAGES=(
   chromium fonts-dejavu-core python3
   clang libclang-rt-14-dev  # libFuzzer targets (fuzz/, scripts/fuzz/run_fuzz.sh)
   libpq-dev postgresql postgresql-client  # fleet server: libpq for sync/--db postgresql://, a real server in scripts/pg/run_pg_tests.sh
+  lintian bash-completion  # the Debian package: its checks (scripts/package/build_deb.sh) and the loader of its completion (a Recommends), issue 26
   qemu-system-x86 linux-image-amd64 busybox-static  # the ASan vcan run in a QEMU VM (scripts/vcan/with_vcan_vm.sh): UML cannot hold ASan's address space
 )
 

@@ -52,6 +52,8 @@ stage "kill -9 of test-run over vcan, 10 times"
 scripts/storage/run_test_run_kills.sh build 10
 stage "the main job (README command (a)), quick counts"
 EMADIAG_MAIN_QUICK=1 scripts/run-main.sh
+stage "the Debian package: install, the main job's quick steps and the site from /usr/bin/emadiag, purge"
+scripts/package/ci_package.sh
 stage "fleet scale, CI size (bench/fleet_scale_bench: 5 tails x 30 days)"
 ./build/bench/fleet_scale_bench 5 30 build/fleet_scale_ci.db
 

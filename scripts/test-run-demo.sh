@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
 # The technician's test run against the simulated EMA, both on vcan0 (run it through
 # scripts/vcan/with_vcan.sh, which provides vcan0 on any host):
-#   scripts/test-run-demo.sh BUILD_DIR OUT_DIR
+#   scripts/test-run-demo.sh BUILD_DIR|EMADIAG_BINARY OUT_DIR
+#   (the installed package: /usr/libexec/emadiag/test-run-demo.sh /usr/bin/emadiag OUT_DIR)
 # Starts `emadiag ema-sim` (case A: on the ground, typical sensor noise) and runs
 # `emadiag test-run` against it; the database and the raw logs go to OUT_DIR. The simulated EMA
 # leaves 3 s after the tool's last frame (--idle-exit), however the test run ended, so nothing
 # waits for a sequence that never comes. Exits with test-run's status (0 = SERVICEABLE).
 set -u
 EMADIAG="$1/src/emadiag"
+[ -f "$1" ] && EMADIAG="$1"
 OUT="$2"
 mkdir -p "$OUT"
 "$EMADIAG" ema-sim --bus socketcan:vcan0 --case A --noise typical --seed 5 --time-scale "${EMADIAG_VCAN_TIME_SCALE:-2}" \

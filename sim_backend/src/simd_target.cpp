@@ -114,6 +114,17 @@ std::vector<std::string> supported_simd_targets() {
     return out;
 }
 
+std::vector<std::string> compiled_simd_targets() {
+    std::vector<std::string> out;
+    // Highway: a lower bit is a better target, so the highest bit set is the narrowest.
+    for (int bit = 62; bit >= 0; --bit) {
+        const std::int64_t t = std::int64_t{1} << bit;
+        if ((HWY_TARGETS & t) != 0 && t != HWY_SCALAR) out.push_back(our_name(hwy::TargetName(t)));
+    }
+    out.insert(out.begin(), "scalar");  // simulate's own path, whatever Highway holds
+    return out;
+}
+
 void set_simd_target(const std::string& name) {
     ensure_initialised();
     const std::lock_guard<std::mutex> lock(g_mutex);

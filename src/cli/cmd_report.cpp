@@ -102,7 +102,7 @@ void print_view(std::ostream& os, const pg::HistoryView& v) {
            << s.tail_number << ' ' << std::setw(8) << s.position.value_or("-") << ' ' << std::setw(20) << s.actuator_serial << ' ' << std::setw(12)
            << s.phase << std::setw(8) << (s.cycles ? std::to_string(*s.cycles) : "-") << std::setw(14) << s.verdict
            << (s.technician_name.empty() ? "" : s.technician_name + (s.technician_certificate.empty() ? "" : " (" + s.technician_certificate + ")"))
-           << '\n';
+           << (s.tool_version.empty() ? "" : "  [emadiag " + s.tool_version + "]") << '\n';
     }
     for (const auto& n : v.notes) os << "  note: " << n << '\n';
 }

@@ -1,5 +1,7 @@
 #pragma once
 // Each subcommand lives in its own cli/cmd_<name>.cpp and registers itself here.
+#include "cli/version.hpp"  // EMADIAG_VERSION (src/CMakeLists.txt) expands to tool_version()
+
 #include <CLI/CLI.hpp>
 
 #include <functional>

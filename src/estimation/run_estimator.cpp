@@ -1,5 +1,7 @@
 #include "estimation/run_estimator.hpp"
 
+#include "core/data_location.hpp"
+
 #include "estimation/network_model.hpp"
 #include "estimation/physics_estimator.hpp"
 #include "estimation/run_checks.hpp"
@@ -12,14 +14,7 @@ namespace emadiag {
 
 std::vector<std::filesystem::path> model_dirs() {
     std::vector<std::filesystem::path> dirs;
-    if (const char* env = std::getenv("EMADIAG_MODELS_DIR")) dirs.emplace_back(env);
-    dirs.emplace_back("models");
-    std::error_code ec;
-    const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-    if (!ec) {
-        dirs.push_back(exe.parent_path().parent_path() / "models");
-        dirs.push_back(exe.parent_path().parent_path().parent_path() / "models");
-    }
+    for (const auto& l : models_locations()) dirs.push_back(l.dir);
     return dirs;
 }
 

@@ -18,8 +18,9 @@ struct RunEstimates {
     std::vector<std::string> notes;         ///< e.g. why there is no network estimate
 };
 
-/// Where shipped models are looked for, in order: $EMADIAG_MODELS_DIR, ./models, <exe>/../models,
-/// <exe>/../../models. The first that exists is the one that counts.
+/// Where shipped models are looked for, in order (core/data_location.hpp): $EMADIAG_MODELS_DIR alone
+/// when set, else <prefix>/share/emadiag/models of the installed binary, else the source tree's models/
+/// of a binary in its build tree; never ./models. The first that exists is the one that counts.
 [[nodiscard]] std::vector<std::filesystem::path> model_dirs();
 
 /// A shipped model for the run's case and sequence, if any. Among several, the one trained on the

@@ -238,10 +238,10 @@ void write_section(std::ostringstream& o, const ReportSection& s, std::size_t in
     } else {
         o << "<table class=\"sessions\">\n"
           << header_row({"session", "started (UTC)", "tail", "position", "serial", "phase", "kind", "operator", "cycles", "hours", "verdict",
-                         "note"});
+                         "note", "emadiag"});
         for (const auto& x : s.sessions)
             o << table_row({h(x.id), h(x.started_utc), h(x.tail_number), h(x.position), h(x.serial), h(x.phase), h(x.kind), h(x.operator_id),
-                            x.cycles ? h(whole(*x.cycles)) : "-", x.hours ? h(num(*x.hours, 6)) : "-", h(x.verdict), h(x.note)},
+                            x.cycles ? h(whole(*x.cycles)) : "-", x.hours ? h(num(*x.hours, 6)) : "-", h(x.verdict), h(x.note), h(x.tool_version)},
                            {false, false, false, false, false, false, false, false, true, true});
         o << "</table>\n";
     }

@@ -113,6 +113,7 @@ ReportSession session_of(const db::StoredTestSession& x) {
     if (x.cycles) r.cycles = static_cast<double>(*x.cycles);
     r.hours = x.hours_h;
     r.verdict = x.verdict;
+    r.tool_version = x.tool_version;
     std::string who = x.technician_name;
     if (!x.technician_certificate.empty()) who += (who.empty() ? "" : " ") + ("(" + x.technician_certificate + ")");
     r.note = who;

@@ -39,6 +39,7 @@ struct ReportSession {
     std::optional<double> cycles, hours;
     std::string verdict;
     std::string note;
+    std::string tool_version;  ///< the emadiag that made the session (its release and build id)
 };
 
 struct ReportPoint {

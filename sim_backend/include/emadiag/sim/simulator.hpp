@@ -128,6 +128,9 @@ inline constexpr const char* kSimdEnvVar = "EMADIAG_SIMD";
 /// The targets this CPU and this build support, narrowest first: always "scalar" (simulate, one run
 /// at a time), then e.g. "sse4", "avx2", "avx512".
 [[nodiscard]] std::vector<std::string> supported_simd_targets();
+/// The targets this build holds code for, whatever the CPU: "scalar", then Highway's names of every
+/// target compiled into the batched kernels (HWY_TARGETS), narrowest first (`emadiag --version`).
+[[nodiscard]] std::vector<std::string> compiled_simd_targets();
 /// Makes simulate_batch run on `name` (one of supported_simd_targets(), or "best" for the widest).
 /// Throws SimError naming the value and the supported ones. Process-wide; call it while no batch runs.
 void set_simd_target(const std::string& name);

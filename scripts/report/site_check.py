@@ -1,0 +1,112 @@
+#!/usr/bin/env python3
+"""Checks of the fleet site (`emadiag site`, docs/install.md), used by site_browser_check.sh.
+
+  site_check.py files SITE_DIR            every page: well-formed, no script, no URL scheme, the CSP
+                                          of default-src 'none'; every link relative, inside the site,
+                                          to a file that exists and, with a #fragment, to an id it holds
+  site_check.py dom SITE_DIR PAGE DOM     the links of PAGE as the browser built its DOM (--dump-dom
+                                          output DOM) resolve the same way
+
+Prints what it checked; exits 1 naming every problem. Standard library only.
+"""
+import os
+import re
+import sys
+import urllib.parse
+import xml.etree.ElementTree as ET
+
+HREF = re.compile(r'(?:href|src|xlink:href)\s*=\s*"([^"]*)"')
+ID = re.compile(r'\sid="([^"]*)"')
+FORBIDDEN = ("<script", "javascript:", "<iframe", "<object", "<embed", "<img", "<link", "@import")
+
+
+def ids_of(path, cache={}):
+    if path not in cache:
+        cache[path] = set(ID.findall(open(path, encoding="utf-8").read()))
+    return cache[path]
+
+
+def check_links(site, page, text, problems):
+    """Every link of `page` (a file inside `site`) resolves; returns how many links were checked."""
+    n = 0
+    for href in HREF.findall(text):
+        n += 1
+        href = href.replace("&amp;", "&")
+        parts = urllib.parse.urlsplit(href)
+        if parts.scheme or parts.netloc:
+            problems.append(f"{page}: link with a scheme or host: {href!r}")
+            continue
+        target = page if not parts.path else os.path.normpath(os.path.join(os.path.dirname(page), urllib.parse.unquote(parts.path)))
+        if os.path.commonpath([os.path.realpath(target), os.path.realpath(site)]) != os.path.realpath(site):
+            problems.append(f"{page}: link leaves the site: {href!r}")
+            continue
+        if not os.path.isfile(target):
+            problems.append(f"{page}: link to a missing file: {href!r} ({target})")
+            continue
+        if parts.fragment and urllib.parse.unquote(parts.fragment) not in ids_of(target):
+            problems.append(f"{page}: link to a missing anchor: {href!r}")
+    return n
+
+
+def check_files(site):
+    problems = []
+    pages = []
+    for d, _, files in os.walk(site):
+        pages += [os.path.join(d, f) for f in files if f.endswith(".html")]
+    links = 0
+    for page in sorted(pages):
+        text = open(page, encoding="utf-8").read()
+        try:
+            ET.fromstring(text.split("\n", 1)[1] if text.startswith("<!DOCTYPE") else text)
+        except ET.ParseError as e:
+            problems.append(f"{page}: not well-formed: {e}")
+        lower = text.lower()
+        for bad in FORBIDDEN:
+            if bad in lower:
+                problems.append(f"{page}: contains {bad!r}")
+        for m in re.finditer(r"(?:https?|ftp|file)://|[\"'(]\s*data:", lower):
+            problems.append(f"{page}: URL scheme at offset {m.start()}")
+        if "Content-Security-Policy" not in text or "default-src 'none'" not in text:
+            problems.append(f"{page}: no Content-Security-Policy with default-src 'none'")
+        links += check_links(site, page, text, problems)
+    index = os.path.join(site, "index.html")
+    if index not in pages:
+        problems.append("no index.html")
+    else:
+        index_text = open(index, encoding="utf-8").read()
+        for page in pages:
+            if page == index:
+                continue
+            rel = os.path.relpath(page, site)
+            if f'href="{rel}"' not in index_text and f'href="{rel}#' not in index_text:
+                problems.append(f"index.html does not link {rel}")
+            if 'href="../index.html"' not in open(page, encoding="utf-8").read():
+                problems.append(f"{rel} does not link back to the index")
+    print(f"files: {len(pages)} pages, {links} links checked, {sum(os.path.getsize(p) for p in pages)} bytes")
+    return problems
+
+
+def check_dom(site, page, dom):
+    problems = []
+    n = check_links(site, os.path.join(site, page), open(dom, encoding="utf-8").read(), problems)
+    print(f"dom: {page}: {n} links in the browser's DOM checked")
+    if n == 0:
+        problems.append(f"{page}: the browser's DOM holds no link")
+    return problems
+
+
+def main():
+    if len(sys.argv) == 3 and sys.argv[1] == "files":
+        problems = check_files(sys.argv[2])
+    elif len(sys.argv) == 5 and sys.argv[1] == "dom":
+        problems = check_dom(sys.argv[2], sys.argv[3], sys.argv[4])
+    else:
+        print(__doc__, file=sys.stderr)
+        return 2
+    for p in problems:
+        print(f"FAIL: {p}")
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
