@@ -112,7 +112,7 @@ is_link() { [ -L "$1" ]; }
 esc() { both | grep -aqP '\x1b|\xc2\x9b'; }   # raw ESC or C1 CSI in the last run's output
 
 # ---------------------------------------------------------------- fixtures
-mk() { "$EMADIAG" "$@" >/dev/null 2>"$W/.fixture.err" || { echo "# fixture failed: emadiag $*: $(head -c 300 "$W/.fixture.err")"; }; }
+mk() { timeout -k 5 120 "$EMADIAG" "$@" >/dev/null 2>"$W/.fixture.err" || { echo "# fixture failed: emadiag $*: $(head -c 300 "$W/.fixture.err")"; }; }
 mk simulate --case A --sequence dyn --noise typical --seed 2 --out run_a.csv
 mk simulate --case B --sequence dyn --noise typical --seed 3 --out run_b.csv
 mk simulate --case B --sequence dyn --noise typical --seed 4 --effect viscous=2e-5 --out run_v.csv
@@ -366,11 +366,19 @@ outcase discover-plot fifo fifo discover oin.csv --plot fifo
 outcase discover-plot symlink link discover oin.csv --plot link
 outcase discover-out-model database odb.db discover oin.csv --out-model odb.db
 outcase import-db input oin.csv import oin.csv --db oin.csv --tail N1 --position LH-ELEV --utc "$UTC"
-for w in report simulate; do
+# Symlinks planted at the temporary names a writer might use beside its target (OUT.tmp, OUT.part, OUT~).
+for w in report trend fleet export simulate dataset train; do
     rm -f out.txt out.txt.tmp out.txt.part out.txt~
     for s in .tmp .part '~'; do ln -sf victim.txt "out.txt$s"; done
-    if [ $w = report ]; then outcase report planted out.txt report --db odb.db --tail N100 --out out.txt
-    else outcase simulate planted out.txt simulate --case A --out out.txt; fi
+    case $w in
+        report)   outcase report planted out.txt report --db odb.db --tail N100 --out out.txt ;;
+        trend)    outcase trend planted out.txt trend --db odb.db --tail N100 --out out.txt ;;
+        fleet)    outcase fleet planted out.txt fleet --db odb.db --out out.txt ;;
+        export)   outcase export planted out.txt export --db odb.db --tail N100 --format json --out out.txt ;;
+        simulate) outcase simulate planted out.txt simulate --case A --out out.txt ;;
+        dataset)  outcase dataset planted out.txt dataset --count 2 --out out.txt ;;
+        train)    outcase train planted out.txt train --dataset oin.ds --timesteps 20 --neurons 2 --max-epochs 2 --out out.txt ;;
+    esac
 done
 # A full disk: the writer fails and leaves no partial or empty file behind.
 fulldisk() {  # fulldisk CASE ARGS...: the output goes to full/, a 64 KiB tmpfs filled to the last byte first
@@ -521,8 +529,8 @@ done
 
 # ---------------------------------------------------------------- 7. live formulas in CSV outputs
 rm -f fx.db
-imp fx.db run_a.csv --operator '=HYPERLINK("http://evil.example/x","click")' --technician '+SUM(1,2)' \
-    --certificate '@cmd' --serial '-2+3'
+imp fx.db run_a.csv --serial '=HYPERLINK("http://evil.example/s","s")' --operator '+SUM(1,2)' \
+    --technician '-cmd|x' --certificate '@SUM(1)'
 fx_rc=$RC
 csv_formulas() {  # prints the first cell that would be a live formula in a spreadsheet
     python3 -c '
@@ -619,7 +627,7 @@ signal_case TERM
 signal_case KILL
 
 # ---------------------------------------------------------------- 10. concurrent creation of a new database
-for rep in 1 2 3; do
+for rep in 1 2 3 4 5; do
     db=cc$rep.db
     rm -f "$db"
     pids=()
@@ -677,9 +685,9 @@ def write(name, header, records):
     t = json.dumps(header).encode()
     open(name, "wb").write(b"EMADSET1" + struct.pack("<Q", len(t)) + t + b"".join(records))
 recs = [bytearray(body[i * R:(i + 1) * R]) for i in range(runs)]
-# 2 samples per run
-h2 = dict(h, samples_per_run=2)
-write("ds_2samples.ds", h2, [r[:8 * 5 + 8 * 6 * 2] for r in recs])
+# 1 and 2 samples per run
+for n in (1, 2):
+    write("ds_%dsamples.ds" % n, dict(h, samples_per_run=n), [r[:8 * 5 + 8 * 6 * n] for r in recs])
 def patched(off, value, which=0):
     out = [bytearray(r) for r in recs]
     struct.pack_into("<d", out[which], off, value)
@@ -688,8 +696,10 @@ write("ds_inf_sample.ds", h, patched(8 * 5 + 8 * 6 * 100 + 8 * 1, math.inf))   #
 write("ds_nan_label.ds", h, patched(0, math.nan))
 write("ds_fdj_100.ds", h, patched(0, 100.0))
 EOF
-run -t 25 -- train --dataset ds_2samples.ds --out m_2s.json --neurons 3 --max-epochs 3 --timesteps 20
-result train dataset-2-samples-per-run "no abort: refused, or a model trained (0 <= exit < 128)" "$(true; echo $?)"
+for n in 1 2; do
+    run -t 25 -- train --dataset "ds_${n}samples.ds" --out "m_${n}s.json" --neurons 3 --max-epochs 3 --resample mean
+    result train "dataset-$n-samples-per-run" "no abort: refused, or a model trained (exit < 128, no 'terminate called')" "$(true; echo $?)"
+done
 for c in inf_sample nan_label fdj_100; do
     rm -f "m_$c.json"
     run -t 25 -- train --dataset "ds_$c.ds" --out "m_$c.json" --neurons 3 --max-epochs 3 --timesteps 20
