@@ -50,16 +50,18 @@ ERR="$W/.err"
 RC=0
 
 # ---------------------------------------------------------------- helpers
-# run [-t SECONDS] [-m KBYTES] [-i STDIN] [-e VAR=VALUE] -- ARGS...: emadiag ARGS under timeout (and
-# an address-space cap), stdout to $OUT, stderr to $ERR, exit status in RC.
+# run [-t SECONDS] [-m KBYTES] [-i STDIN] [-e VAR=VALUE] [-C DIR] -- ARGS...: emadiag ARGS under timeout
+# (and an address-space cap), in DIR (default the work directory), stdout to $OUT, stderr to $ERR, exit
+# status in RC.
 run() {
-    local t=$T_DEFAULT mem="" in=/dev/null envs=()
+    local t=$T_DEFAULT mem="" in=/dev/null envs=() dir=.
     while [ $# -gt 0 ]; do
         case "$1" in
             -t) t=$2; shift 2 ;;
             -m) mem=$2; shift 2 ;;
             -i) in=$2; shift 2 ;;
             -e) envs+=("$2"); shift 2 ;;
+            -C) dir=$2; shift 2 ;;
             --) shift; break ;;
             *) break ;;
         esac
@@ -67,6 +69,7 @@ run() {
     # In a subshell whose own stderr is discarded: bash's "Aborted"/"Killed" job notices stay out of the report.
     (
         [ -n "$mem" ] && ulimit -v "$mem"
+        cd "$dir" || exit 99
         env "${envs[@]}" timeout -k 5 "$t" "$EMADIAG" "$@" <"$in" >"$OUT" 2>"$ERR"
     ) 2>/dev/null
     RC=$?
@@ -100,12 +103,24 @@ result() {
         echo "FAIL $cls $case: $exp -- $what"
     fi
 }
+# cpdb SRC DST: a database with its sidecar files (SRC.anchor, SRC-wal, ...), as an operator copies it.
+cpdb() {
+    rm -f "$2" "$2".* "$2"-*
+    cp "$1" "$2"
+    local f
+    for f in "$1".* "$1"-*; do [ -e "$f" ] && cp "$f" "$2${f#"$1"}"; done
+    return 0
+}
 sha() { if [ -e "$1" ]; then sha256sum "$1" | cut -c1-64; else echo absent; fi; }
 both() { cat "$OUT" "$ERR"; }
 has() { both | grep -aqi "$@"; }
 serviceable_said() { both | grep -aqE '(^|[^A-Z_])(verdict|VERDICT):? SERVICEABLE'; }
-sessions() { sqlite3 "$1" "select count(*) from test_sessions${2:+ where tail_number='$2'}" 2>/dev/null || echo 0; }
-verdicts() { sqlite3 "$1" "select group_concat(verdict, ',') from test_sessions" 2>/dev/null; }
+# Read-only queries; a missing or empty file is 0 sessions (and is not created by asking).
+sessions() {
+    [ -s "$1" ] || { echo 0; return; }
+    sqlite3 -readonly "$1" "select count(*) from test_sessions${2:+ where tail_number='$2'}" 2>/dev/null || echo 0
+}
+verdicts() { [ -s "$1" ] && sqlite3 -readonly "$1" "select group_concat(verdict, ',') from test_sessions" 2>/dev/null; }
 is_fifo() { [ -p "$1" ]; }
 is_chr() { [ -c "$1" ] && [ ! -L "$1" ]; }
 is_link() { [ -L "$1" ]; }
@@ -187,7 +202,7 @@ notest() {  # notest CASE FILE [import args]: the run must not give, or be store
     local v
     v=$(verdicts "nt_$case.db")
     result truncated "$case" "NO_TEST stored, or refused (exit != 0, nothing stored); never SERVICEABLE" \
-        "$({ [ "$v" = NO_TEST ] || [ -z "$v" -a "$RC" != 0 ]; } && ! serviceable_said; echo $?)" \
+        "$({ [ "$v" = NO_TEST ] || { [ -z "$v" ] && [ "$RC" != 0 ]; }; } && ! serviceable_said; echo $?)" \
         "$(said); stored verdicts: ${v:-none}"
 }
 notest candump-first-1000-lines trunc.log
@@ -221,7 +236,7 @@ nonsense() {  # nonsense CASE FILE: import refuses it and stores nothing
     local v
     v=$(verdicts "ns_$case.db")
     result nonsense "$case" "refused (exit != 0, nothing stored) or at most NO_TEST; never SERVICEABLE" \
-        "$({ [ "$v" = NO_TEST ] || [ -z "$v" -a "$RC" != 0 ]; } && ! serviceable_said; echo $?)" "$(said); stored verdicts: ${v:-none}"
+        "$({ [ "$v" = NO_TEST ] || { [ -z "$v" ] && [ "$RC" != 0 ]; }; } && ! serviceable_said; echo $?)" "$(said); stored verdicts: ${v:-none}"
 }
 meta_csv case_z.csv 's/^# case=A$/# case=Z/'
 nonsense case-Z case_z.csv
@@ -304,7 +319,7 @@ badlimits FDJ-max-1e300 '{"FDJ_Nm": {"max": 1e300}}'
 badlimits nested-duplicate '{"FDJ_Nm": {"max": 0.09, "max": 5}}'
 
 # ---------------------------------------------------------------- 3. a foreign run into discover --db --tail
-cp hh.db fd.db
+cpdb hh.db fd.db
 before=$(sqlite3 fd.db "select count(*) from discovery_findings")
 run -t 90 -- discover run_v.csv --db fd.db --tail N100
 after=$(sqlite3 fd.db "select count(*) from discovery_findings")
@@ -324,7 +339,7 @@ DS_SHA=$(sha t.ds)
 outcase() {  # outcase WRITER TARGET-KIND TARGET ARGS... (the args hold the target)
     local writer=$1 kind=$2 target=$3; shift 3
     rm -f victim.txt; echo precious >victim.txt
-    cp hh.db odb.db; cp run_a.csv oin.csv; cp t.ds oin.ds
+    cpdb hh.db odb.db; cp run_a.csv oin.csv; cp t.ds oin.ds
     local t=20
     [ "$writer" = discover ] && t=90
     run -t "$t" -- "$@"
@@ -405,7 +420,7 @@ fulldisk discover-out-model discover run_a.csv --out-model full/o.json --out-par
 # ---------------------------------------------------------------- 5. verify sees changes made outside the tool
 tamper() {  # tamper CASE SQL: on a copy of hh.db with the append-only triggers dropped
     local case=$1 sql=$2 src=${3:-hh.db}
-    cp "$src" "tp_$case.db"
+    cpdb "$src" "tp_$case.db"
     local drops
     drops=$(sqlite3 "tp_$case.db" "select 'DROP TRIGGER ' || name || ';' from sqlite_master where type = 'trigger'")
     sqlite3 "tp_$case.db" "$drops $sql" 2>"$W/.sql.err" || echo "# tamper $case: $(head -c 200 "$W/.sql.err")"
@@ -413,7 +428,7 @@ tamper() {  # tamper CASE SQL: on a copy of hh.db with the append-only triggers 
     result verify "$case" "verify reports the change: exit != 0" "$(test "$RC" != 0; echo $?)"
 }
 tamper installation-serial "UPDATE installations SET to_serial = 'FAKE-1';"
-cp hh.db df.db
+cpdb hh.db df.db
 run -t 90 -- discover --db df.db --tail N100
 dfn=$(sqlite3 df.db "select count(*) from discovery_findings")
 [ "$dfn" -gt 0 ] || echo "# discover --db df.db --tail N100 stored no finding: $(said)"
@@ -424,7 +439,7 @@ tamper delete-last-session "DELETE FROM findings WHERE session_id = 3; DELETE FR
   DELETE FROM runs WHERE session_id = 3; DELETE FROM session_artifacts WHERE session_id = 3; DELETE FROM test_sessions WHERE session_id = 3;
   UPDATE chain_heads SET session_id = 2, sessions = 2, content_sha256 = (SELECT content_sha256 FROM test_sessions WHERE session_id = 2);"
 tamper technician-name "UPDATE test_sessions SET technician_name = 'Nobody' WHERE session_id = 1;"
-cp hh.db junk.db
+cpdb hh.db junk.db
 head -c 5000 /dev/urandom >>junk.db
 run -- verify --db junk.db --tail N100
 result verify appended-5000-random-bytes "verify reports the file is not what the tool wrote: exit != 0" "$(test "$RC" != 0; echo $?)"
@@ -450,23 +465,36 @@ json.dump({"format": "emadiag-session-spool-1", "tail_number": sys.argv[2], "pha
           open(sys.argv[1], "w"))
 EOF
 }
+# recover runs inside the spool directory, so that a log_path given by its file name (or relative to
+# the spool) resolves the same way whether the binary resolves it against the spool or the working
+# directory.
 SECRET="PRIVATE-KEY-$(head -c 8 /dev/urandom | od -An -tx1 | tr -d ' \n')"
 printf '%s\n' "$SECRET" >private.txt
-mkdir -p rc1.db.spool
-spool_manifest rc1.db.spool/N300_20260602T100000Z_pre-flight.json N300 "$W/private.txt"
-run -- recover --db rc1.db
 hexsecret=$(printf '%s' "$SECRET" | od -An -tx1 | tr -d ' \n')
-leak=no
-{ grep -aqF "$SECRET" rc1.db 2>/dev/null || sqlite3 rc1.db .dump 2>/dev/null | grep -aqi "$hexsecret"; } && leak=yes
 b64=$(printf '%s\n' "$SECRET" | base64 -w0 | cut -c1-16)
-run -- export --db rc1.db --tail N300 --format json
-grep -aqF "$b64" "$OUT" && leak=yes
-result recover private-file "a manifest naming a file outside the spool: the file is not stored" "$(test "$leak" = no; echo $?)" "secret in the database/export: $leak"
+private_case() {  # private_case CASE LOG_PATH [SETUP-IN-SPOOL]: the private file must not reach the database
+    local case=$1 path=$2 db=rp_$1.db
+    mkdir -p "$db.spool"
+    [ -n "${3:-}" ] && ( cd "$db.spool" && eval "$3" )
+    spool_manifest "$db.spool/N300_20260602T100000Z_pre-flight.json" N300 "$path"
+    run -C "$db.spool" -- recover --db "../$db"
+    local rc=$RC leak=no
+    { grep -aqF "$SECRET" "$db" 2>/dev/null || { [ -s "$db" ] && sqlite3 -readonly "$db" .dump 2>/dev/null | grep -aqi "$hexsecret"; }; } && leak=yes
+    if [ -s "$db" ]; then
+        run -- export --db "$db" --tail N300 --format json
+        grep -aqF "$b64" "$OUT" && leak=yes
+    fi
+    RC=$rc
+    result recover "$case" "a manifest naming a file outside the spool: the file is not stored" "$(test "$leak" = no; echo $?)" "recover exit $rc; secret in the database/export: $leak"
+}
+private_case private-file-absolute "$W/private.txt"
+private_case private-file-dotdot ../private.txt
+private_case private-file-symlink-in-spool N300_dyn_1.log 'ln -s ../private.txt N300_dyn_1.log'
 mkdir -p rc2.db.spool
 cp full.log rc2.db.spool/N301_dyn_1.log
 printf '{"format": "emadiag-session-spool-1", "tail_number": ' >rc2.db.spool/A_bad.json
-spool_manifest rc2.db.spool/N301_20260602T100000Z_pre-flight.json N301 "$W/rc2.db.spool/N301_dyn_1.log"
-run -- recover --db rc2.db
+spool_manifest rc2.db.spool/N301_20260602T100000Z_pre-flight.json N301 N301_dyn_1.log
+run -C rc2.db.spool -- recover --db ../rc2.db
 result recover bad-then-good-manifest "a bad manifest is reported and the good one still stored (1 session of N301)" \
     "$(test "$(sessions rc2.db N301)" = 1; echo $?)" "$(said); $(sessions rc2.db N301) sessions of N301"
 
@@ -806,7 +834,7 @@ result messages term-30000-deep "refused with an error under 2000 bytes" "$(test
 readonly_case() {  # readonly_case CMD: on hh.db in a read-only bind mount
     local cmd=$1
     mkdir -p ro
-    cp hh.db ro/ro.db
+    cpdb hh.db ro/ro.db
     if ! unshare -m true 2>/dev/null; then result messages "$cmd-read-only-media" "a probe set-up: unshare -m (run as root)" 1 "unshare -m not permitted"; return; fi
     unshare -m bash -c 'mount --bind -o ro "$0/ro" "$0/ro" || exit 99; cd "$0"; exec timeout -k 5 20 "$@"' "$W" "$EMADIAG" "$cmd" --db ro/ro.db --tail N100 >"$OUT" 2>"$ERR"
     RC=$?
