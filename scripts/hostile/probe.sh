@@ -632,12 +632,13 @@ n=$(sessions ph.db)
 result partial session-3-fails "a history whose session 3 fails: exit != 0 and no partial set (0 or 3 sessions)" \
     "$(test "$RC" != 0 && { [ "$n" = 0 ] || [ "$n" = 3 ]; }; echo $?)" "$(said); $n sessions stored"
 HS_N=20
-signal_case() {  # signal_case SIGNAL: history-sim of HS_N sessions, SIGNAL after 1.5 s
+signal_case() {  # signal_case SIGNAL: history-sim of HS_N sessions, SIGNAL 0.5 s after it created the database
     local sig=$1 db=sig_$1.db
     rm -f "$db"
     timeout -k 5 60 "$EMADIAG" history-sim --db "$db" --tail N500 --position LH-ELEV --sessions $HS_N --noise none >"$OUT" 2>"$ERR" &
-    local pid=$!
-    sleep 1.5
+    local pid=$! i
+    for i in $(seq 200); do [ -e "$db" ] && break; sleep 0.05; done
+    sleep 0.5
     # timeout forwards TERM/INT; KILL goes to emadiag itself.
     if [ "$sig" = KILL ]; then
         local child
@@ -651,6 +652,7 @@ signal_case() {  # signal_case SIGNAL: history-sim of HS_N sessions, SIGNAL afte
     local n1 n2 what
     n1=$(sessions "$db")
     what="after SIG$sig: $n1 of $HS_N sessions"
+    [ "$n1" = $HS_N ] && what="$what (it finished before the signal: nothing shown)"
     if [ "$n1" != 0 ] && [ "$n1" != $HS_N ]; then
         timeout -k 5 60 "$EMADIAG" history-sim --db "$db" --tail N500 --position LH-ELEV --sessions $HS_N --noise none >/dev/null 2>&1
         n2=$(sessions "$db")
