@@ -367,7 +367,7 @@ outcase() {  # outcase WRITER TARGET-KIND TARGET ARGS... (the args hold the targ
 }
 ln -s victim.txt link
 for kind in database device fifo symlink; do
-    case $kind in database) tg=odb.db ;; device) tg=devfull ;; fifo) tg=fifo ;; symlink) tg=link ;; esac
+    case $kind in database) tg=odb.db ;; device) tg=devfull ;; fifo) tg="fifo" ;; symlink) tg="link" ;; esac
     outcase report "$kind" "$tg" report --db odb.db --tail N100 --out "$tg"
     outcase trend "$kind" "$tg" trend --db odb.db --tail N100 --out "$tg"
     outcase fleet "$kind" "$tg" fleet --db odb.db --out "$tg"
