@@ -136,6 +136,12 @@ void Effects::set(const std::string& name, double value) {
     this->*(e->member) = value;
 }
 
+Effects::Range Effects::range(const std::string& name) {
+    const EffectSpec* e = find_effect(name);
+    if (e == nullptr) throw SimError("unknown effect '" + name + "'");
+    return {e->min, e->max, e->unit};
+}
+
 double Effects::get(const std::string& name) const {
     const EffectSpec* e = find_effect(name);
     if (e == nullptr) throw SimError("unknown effect '" + name + "'");

@@ -10,38 +10,64 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <thread>
 #include <utility>
 
 namespace emadiag::discovery {
 namespace {
 
-/// Range and finite-difference step of each fittable parameter (ranges: sim_backend ema_params.cpp).
+/// Range and finite-difference step of each fittable parameter.
 struct ParamSpec {
-    const char* name;
+    std::string name;
     double lo, hi;
     double step_abs;  ///< finite-difference step floor
 };
-constexpr ParamSpec kSpecs[] = {
-    {"fdj_nm", 0.0, 10.0, 2e-4},
-    {"eta_o", 0.3, 0.9999, 2e-3},  // below 1: eq. (4) gives eta_A = 1 at eta_O = 1, outside the simulator range
-    {"viscous", 0.0, 1.0, 1e-7},
-    {"stribeck_amplitude", 0.0, 10.0, 2e-3},
-    {"stribeck_speed", 1.0, 1e4, 1.0},
-    {"spall_amplitude", 0.0, 10.0, 2e-3},
-    {"spall_center", -90.0, 90.0, 0.02},
-    {"spall_width", 0.05, 90.0, 0.02},
-    {"ripple_amplitude", 0.0, 10.0, 2e-3},
-    {"current_gain_error", -0.5, 0.5, 2e-4},
-    {"hinge_offset", -5000.0, 5000.0, 0.5},
-    {"true_inertia", 1e-7, 1.0, 1e-7},
+
+/// An effect fitted by discovery: its finite-difference step floor and, where the fit must stay
+/// inside the simulator's range (sim::Effects::range, the one definition), the lower end and why.
+struct EffectFit {
+    const char* name;
+    double step_abs;
+    double fit_lo;  ///< NaN: the simulator's lower end
 };
+constexpr double kSimulatorLo = std::numeric_limits<double>::quiet_NaN();
+constexpr EffectFit kEffectFits[] = {
+    {"viscous", 1e-7, kSimulatorLo},
+    {"stribeck_amplitude", 2e-3, kSimulatorLo},
+    // the simulator takes 1e-6 rad/s; a fit starts at its 1 rad/s step, so a step never leaves the range
+    {"stribeck_speed", 1.0, 1.0},
+    {"spall_amplitude", 2e-3, kSimulatorLo},
+    {"spall_center", 0.02, kSimulatorLo},
+    // the simulator takes 1e-6 deg; a fit keeps 2.5 of its 0.02 deg steps above zero
+    {"spall_width", 0.02, 0.05},
+    {"ripple_amplitude", 2e-3, kSimulatorLo},
+    {"current_gain_error", 2e-4, kSimulatorLo},
+    {"hinge_offset", 0.5, kSimulatorLo},
+    // the simulator reads 0 as "the datasheet J"; a fitted inertia is one step above it
+    {"true_inertia", 1e-7, 1e-7},
+};
+
+const std::vector<ParamSpec>& specs() {
+    static const std::vector<ParamSpec> all = [] {
+        std::vector<ParamSpec> v = {
+            {"fdj_nm", 0.0, 10.0, 2e-4},
+            {"eta_o", 0.3, 0.9999, 2e-3},  // below 1: eq. (4) gives eta_A = 1 at eta_O = 1, outside the simulator range
+        };
+        for (const auto& e : kEffectFits) {
+            const sim::Effects::Range r = sim::Effects::range(e.name);
+            v.push_back({e.name, std::isnan(e.fit_lo) ? r.min : e.fit_lo, r.max, e.step_abs});
+        }
+        return v;
+    }();
+    return all;
+}
 /// Relative finite-difference step (the simulator's chatter makes smaller steps noisy).
 constexpr double kStepRel = 0.005;
 
 /// Coefficients of sim::Term entries are named "term:K" (K the index in EmaParams::terms): any
 /// value; the step is relative (kStepRel) with this floor.
-constexpr ParamSpec kTermSpec = {"term", -1e12, 1e12, 1e-12};
+const ParamSpec kTermSpec = {"term", -1e12, 1e12, 1e-12};
 
 std::size_t term_index(const std::string& name, const sim::EmaParams& p) {
     const std::size_t k = std::stoul(name.substr(5));
@@ -54,7 +80,7 @@ std::size_t term_index(const std::string& name, const sim::EmaParams& p) {
 
 const ParamSpec& spec(const std::string& name) {
     if (is_term_parameter(name)) return kTermSpec;
-    for (const auto& s : kSpecs) {
+    for (const auto& s : specs()) {
         if (name == s.name) return s;
     }
     throw EmadiagError("discovery: parameter '" + name + "' cannot be fitted");
@@ -100,6 +126,17 @@ std::vector<double> trajectory_rows(const RunSignals& a, const RunSignals& b, co
 bool is_term_parameter(const std::string& name) {
     return name.size() > 5 && name.compare(0, 5, "term:") == 0 &&
            name.find_first_not_of("0123456789", 5) == std::string::npos;
+}
+
+FitRange fit_range(const std::string& name) {
+    const ParamSpec& s = spec(name);
+    return {s.lo, s.hi};
+}
+
+std::vector<std::string> fitted_effect_names() {
+    std::vector<std::string> v;
+    for (const auto& e : kEffectFits) v.emplace_back(e.name);
+    return v;
 }
 
 std::string term_parameter(std::size_t index) { return "term:" + std::to_string(index); }

@@ -105,6 +105,15 @@ struct FitResult {
 /// Term coefficients are fitted by the name "term:K", K the index in EmaParams::terms.
 [[nodiscard]] bool is_term_parameter(const std::string& name);
 [[nodiscard]] std::string term_parameter(std::size_t index);
+/// The range a fit keeps one parameter in (effects: inside sim::Effects::range, narrowed only where
+/// resimulation.cpp says why); throws on a parameter that cannot be fitted.
+struct FitRange {
+    double lo;
+    double hi;
+};
+[[nodiscard]] FitRange fit_range(const std::string& name);
+/// The effects (sim::Effects names) that discovery fits.
+[[nodiscard]] std::vector<std::string> fitted_effect_names();
 /// Reads / writes one fittable parameter of EmaParams by name (eta_o also sets eta_a by eq. 4).
 [[nodiscard]] double get_parameter(const sim::EmaParams& p, const std::string& name);
 void set_parameter(sim::EmaParams& p, const std::string& name, double value);

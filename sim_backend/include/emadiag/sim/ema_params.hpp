@@ -30,6 +30,16 @@ struct Effects {
     /// Sets one effect by name; throws SimError naming the effect on an unknown name.
     void set(const std::string& name, double value);
     [[nodiscard]] double get(const std::string& name) const;
+
+    /// The allowed range of one effect, [min, max] in its unit: the one definition, read by set()
+    /// and by every fit of the effect (discovery narrows it only with a stated reason).
+    struct Range {
+        double min;
+        double max;
+        const char* unit;
+    };
+    /// Throws SimError naming the effect on an unknown name.
+    [[nodiscard]] static Range range(const std::string& name);
 };
 
 /// Datasheet parameters (ema-reference.md section 1), SI units.
