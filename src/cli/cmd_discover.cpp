@@ -5,6 +5,7 @@
 // and after (docs/discovery.md). --out-model writes the augmented model JSON (apply_model reads
 // it); --out-params writes its sim::EmaParams JSON, which `emadiag simulate --params` reads.
 #include "cli/command.hpp"
+#include "cli/db_source.hpp"
 #include "core/emadiag_error.hpp"
 #include "core/run_csv.hpp"
 #include "discovery/candidate_effect.hpp"
@@ -17,6 +18,7 @@
 #include "emadiag/db/record_store.hpp"
 #include "emadiag/sim/simulator.hpp"
 #include "emadiag/io/output_path.hpp"
+#include "emadiag/io/text_field.hpp"
 #include "emadiag/io/utc_now.hpp"
 
 #include <nlohmann/json.hpp>
@@ -213,19 +215,19 @@ Run run_from_stored(const db::StoredRun& s) {
     return r;
 }
 
-void write_text_file(const std::string& path, const std::string& text) {
-    std::ofstream out(path);
-    if (!out) throw EmadiagError("cannot write " + path);
-    out << text;
-    if (!out) throw EmadiagError("error writing " + path);
+/// The files discover reads: the run CSVs and the database (none of them may be an output).
+io::OutputInputs discover_inputs(const std::vector<std::string>& paths, const std::string& db_path) {
+    io::OutputInputs inputs(paths);
+    if (!db_path.empty()) inputs.databases.push_back(db_path);
+    return inputs;
 }
 
-void write_json_file(const std::string& path, const nlohmann::json& j) {
-    if (const auto problem = io::output_path_problem(path, "JSON output")) throw EmadiagError(*problem);
-    std::ofstream out(path);
-    if (!out) throw EmadiagError("cannot write " + path);
-    out << j.dump(2) << '\n';
-    if (!out) throw EmadiagError("error writing " + path);
+void write_text_file(const std::string& path, const std::string& text, const io::OutputInputs& inputs) {
+    io::write_output_file<EmadiagError>(path, "SVG plot", inputs, text);
+}
+
+void write_json_file(const std::string& path, const nlohmann::json& j, const io::OutputInputs& inputs) {
+    io::write_output_file<EmadiagError>(path, "JSON output", inputs, j.dump(2) + "\n");
 }
 
 const bool registered = register_command(Command{
@@ -240,7 +242,7 @@ const bool registered = register_command(Command{
         auto json = std::make_shared<bool>(false);
         auto max_effects = std::make_shared<int>(discovery::kMaxEffects);
         sub.add_option("runs", *paths, "Run CSV file(s); several runs are also screened together");
-        sub.add_option("--db", *db_path, "Maintenance database (with --tail)")->check(CLI::ExistingFile);
+        sub.add_option("--db", *db_path, "Maintenance database (with --tail)")->check(sqlite_file());
         sub.add_option("--tail", *tail, "Take the tail's stored runs from the database (oldest first)");
         sub.add_flag("--json", *json, "Print the report as JSON (docs/discovery.md)");
         sub.add_option("--out-model", *out_model, "Write the augmented model JSON here");
@@ -248,6 +250,10 @@ const bool registered = register_command(Command{
         sub.add_option("--plot", *plot, "Write an SVG of the residual against the variable it depends on most");
         sub.add_option("--max-effects", *max_effects, "Most effects to add")->check(CLI::Range(0, discovery::kMaxEffects));
         return [=] {
+            // Checked before the discovery (seconds to minutes): an output is no input, no database, no
+            // device, FIFO or link, and the three outputs are three files.
+            const io::OutputInputs inputs = discover_inputs(*paths, *db_path);
+            io::check_output_paths<EmadiagError>({{*out_model, "--out-model"}, {*out_params, "--out-params"}, {*plot, "--plot"}}, inputs);
             std::vector<Run> runs;
             std::vector<std::string> labels;
             if (!tail->empty()) {
@@ -264,7 +270,7 @@ const bool registered = register_command(Command{
             }
             for (const auto& p : *paths) {
                 runs.push_back(read_run_csv_file(p));
-                labels.push_back(p);
+                labels.push_back(io::escape_text(p));  // a file name shown in the report: printable
             }
             if (runs.empty()) throw EmadiagError("discover: give run CSV file(s), or --db FILE --tail T");
             discovery::DiscoveryOptions opt;
@@ -290,9 +296,9 @@ const bool registered = register_command(Command{
                 const sim::SimCounters sims1 = sim::sim_counters();
                 const auto t1 = std::chrono::steady_clock::now();
                 store_finding(discovery::finding_record(r));
-                if (!out_model->empty()) write_json_file(*out_model, r.model.to_json());
-                if (!out_params->empty()) write_json_file(*out_params, r.model.params.to_json());
-                if (!plot->empty()) write_text_file(*plot, plot_of(r, labels.front()));
+                if (!out_model->empty()) write_json_file(*out_model, r.model.to_json(), inputs);
+                if (!out_params->empty()) write_json_file(*out_params, r.model.params.to_json(), inputs);
+                if (!plot->empty()) write_text_file(*plot, plot_of(r, labels.front()), inputs);
                 if (*json) std::cout << r.to_json().dump(2) << '\n';
                 else print_text(std::cout, labels.front(), r);
                 if (*json) return 0;  // the JSON report stays one document
@@ -313,9 +319,9 @@ const bool registered = register_command(Command{
             const discovery::AcrossRunsReport all = discovery::discover_runs(runs, labels, opt);
             const discovery::FindingRecord record = discovery::finding_record(all);
             store_finding(record);
-            if (!out_model->empty()) write_json_file(*out_model, record.model);
+            if (!out_model->empty()) write_json_file(*out_model, record.model, inputs);
             if (!out_params->empty()) {
-                write_json_file(*out_params, all.reports.front().model.params.to_json());
+                write_json_file(*out_params, all.reports.front().model.params.to_json(), inputs);
             }
             if (!plot->empty()) {
                 std::size_t pick = 0;
@@ -325,7 +331,7 @@ const bool registered = register_command(Command{
                         break;
                     }
                 }
-                write_text_file(*plot, plot_of(all.reports[pick], all.labels[pick]));
+                write_text_file(*plot, plot_of(all.reports[pick], all.labels[pick]), inputs);
             }
             if (*json) {
                 std::cout << all.to_json().dump(2) << '\n';

@@ -20,6 +20,7 @@
 #include "diagnosis/verdict.hpp"
 #include "emadiag/db/run_store.hpp"
 #include "emadiag/db/test_session_store.hpp"
+#include "emadiag/io/text_field.hpp"
 #include "emadiag/sim/simulator.hpp"
 #include "estimation/health_estimate.hpp"
 #include "estimation/run_estimator.hpp"
@@ -121,6 +122,7 @@ const bool registered = register_command(Command{
             set_record_info(checked, o->record);  // an unknown position is an error before anything is simulated
             const std::string serial =
                 !o->serial.empty() ? o->serial : "SIM-" + o->tail + (o->record.position.empty() ? "" : "-" + o->record.position);
+            io::check_text_field<EmadiagError>("--serial", serial);
             const std::int64_t first_cycles = o->record.cycles.value_or(0);
             const double start_days = pg::parse_utc_days_or_throw(o->start_utc, "--start-utc");
             const sim::LoadCase load_case = sim::parse_load_case(o->load_case);

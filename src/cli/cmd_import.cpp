@@ -14,6 +14,7 @@
 #include "diagnosis/session_storage.hpp"
 #include "diagnosis/verdict.hpp"
 #include "emadiag/db/test_session_store.hpp"
+#include "emadiag/io/text_field.hpp"
 #include "estimation/run_estimator.hpp"
 #include "prognostics/utc_time.hpp"
 
@@ -73,6 +74,7 @@ const bool registered = register_command(Command{
             if (utc.empty()) throw EmadiagError(o->file + ": the run has no started_utc key; give --utc YYYY-MM-DDThh:mm:ssZ");
             (void)prognostics::parse_utc_days_or_throw(utc, "--utc");
             const std::string serial = !o->serial.empty() ? o->serial : run.meta_value("ema_serial_number").value_or("");
+            io::check_text_field<EmadiagError>(!o->serial.empty() ? "--serial" : o->file + ": run metadata ema_serial_number", serial);
 
             AssessedRun a;
             a.sequence = run.sequence;
@@ -111,9 +113,9 @@ const bool registered = register_command(Command{
 
             db::Database database(o->db);
             const db::SessionReceipt receipt = db::store_session(database, s);
-            std::cout << "emadiag import: " << o->file << " (case " << run.load_case << ", " << run.sequence << ", " << run.samples.size()
-                      << " samples) -> tail " << o->tail << ", position " << *s.position << ", serial " << (serial.empty() ? "?" : serial)
-                      << ", " << o->phase << ", " << utc << '\n';
+            std::cout << "emadiag import: " << io::escape_text(o->file) << " (case " << io::escape_text(run.load_case) << ", "
+                      << io::escape_text(run.sequence) << ", " << run.samples.size() << " samples) -> tail " << o->tail << ", position "
+                      << *s.position << ", serial " << (serial.empty() ? "?" : serial) << ", " << o->phase << ", " << io::escape_text(utc) << '\n';
             for (const auto& f : verdict.findings) {
                 std::ostringstream line;
                 line.precision(5);
@@ -127,9 +129,9 @@ const bool registered = register_command(Command{
                 line << "  " << to_string(f.status);
                 std::cout << line.str() << '\n';
             }
-            std::cout << "verdict " << to_string(verdict.verdict) << " -- " << verdict.reason << '\n';
+            std::cout << "verdict " << to_string(verdict.verdict) << " -- " << io::escape_text(verdict.reason) << '\n';
             if (receipt.installation) std::cout << "INSTALLATION CHANGE: " << describe_installation(*receipt.installation) << '\n';
-            std::cout << "stored as session " << receipt.session_id << " in " << o->db << " (chain " << receipt.content_sha256.substr(0, 16)
+            std::cout << "stored as session " << receipt.session_id << " in " << io::escape_text(o->db) << " (chain " << receipt.content_sha256.substr(0, 16)
                       << ")\n";
             return 0;
         };

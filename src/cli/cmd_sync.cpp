@@ -43,7 +43,7 @@ const bool registered_sync = register_command(Command{
     "sync", "Push the station's sessions (runs, raw logs, estimates, findings, installations, discoveries) to the fleet server (PostgreSQL)",
     [](CLI::App& sub) -> std::function<int()> {
         auto o = std::make_shared<SyncCliOptions>();
-        sub.add_option("--db", o->db, "The station's maintenance database (SQLite)")->capture_default_str()->check(CLI::ExistingFile);
+        sub.add_option("--db", o->db, "The station's maintenance database (SQLite)")->capture_default_str()->check(sqlite_file());
         sub.add_option("--to", o->to, "Fleet server: postgresql://HOST[:PORT]/DATABASE?user=ROLE (no password in it)")
             ->required()
             ->check(fleet_uri());

@@ -3,6 +3,8 @@
 // never with a password in it: ~/.pgpass, PGPASSFILE or a service file hold that).
 #include "emadiag/db/db_error.hpp"
 #include "emadiag/db/pg_fleet.hpp"
+#include "emadiag/io/text_field.hpp"
+#include "emadiag/io/uri.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -24,10 +26,25 @@ inline CLI::Validator sqlite_file_or_fleet_uri() {
                 return {};
             }
             std::error_code ec;
-            if (!std::filesystem::is_regular_file(value, ec)) return "File does not exist: " + value;
+            if (!std::filesystem::is_regular_file(value, ec)) return "File does not exist: " + io::escape_text(value);
             return {};
         },
         "FILE or postgresql://...");
+}
+
+/// An existing SQLite file, for the commands that work on the station's file only (verify, export,
+/// sync's station, discover): a URI (postgresql://..., any scheme://) is refused without repeating it
+/// (it may hold a password).
+inline CLI::Validator sqlite_file() {
+    return CLI::Validator(
+        [](std::string& value) -> std::string {
+            if (io::has_uri_scheme(value))
+                return "this command works on a station's SQLite file only, not a URI (" + io::escape_text(io::redact_uri_passwords(value)) + ")";
+            std::error_code ec;
+            if (!std::filesystem::is_regular_file(value, ec)) return "File does not exist: " + io::escape_text(value);
+            return {};
+        },
+        "FILE");
 }
 
 }  // namespace emadiag::cli
