@@ -137,14 +137,16 @@ void check_text_field(const std::string& field, std::string_view value, std::siz
 }
 
 /// One CSV cell: a cell that starts with = + - @, a tab or a carriage return and is not a plain number
-/// gets a leading ' (OWASP CSV injection: a spreadsheet never runs it as a formula); then quoted when
-/// it holds a comma, quote, line break or the quote added (RFC 4180).
+/// gets a leading ' (OWASP CSV injection: a spreadsheet never runs it as a formula); control
+/// characters, line breaks included, are rendered visibly (escape_text: one record is one line, and a
+/// CSV on a terminal prints no forged line and sends no escape sequence); then quoted when it holds a
+/// comma or a quote (RFC 4180). The exact text of a multi-line field is in the JSON export.
 [[nodiscard]] inline std::string csv_field(std::string_view s) {
     std::string cell;
     if (!s.empty() && (s[0] == '=' || s[0] == '+' || s[0] == '-' || s[0] == '@' || s[0] == '\t' || s[0] == '\r') && !is_plain_number(s))
         cell = "'";
-    cell.append(s);
-    if (cell.find_first_of(",\"\r\n") == std::string::npos) return cell;
+    cell += escape_text(s);
+    if (cell.find_first_of(",\"") == std::string::npos) return cell;
     std::string out = "\"";
     for (char c : cell) out += c == '"' ? std::string("\"\"") : std::string(1, c);
     return out + "\"";

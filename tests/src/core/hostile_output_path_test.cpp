@@ -173,8 +173,9 @@ TEST(CsvField, FormulasAreNeutralisedAndNumbersAreLeftAlone) {
     EXPECT_EQ(io::csv_field("+1+cmd|' /C calc'!A0"), "'+1+cmd|' /C calc'!A0");
     EXPECT_EQ(io::csv_field("-2+3"), "'-2+3");
     EXPECT_EQ(io::csv_field("@SUM(A1)"), "'@SUM(A1)");
-    EXPECT_EQ(io::csv_field("\t=1"), "'\t=1");
-    EXPECT_EQ(io::csv_field("\r=1"), "\"'\r=1\"");
+    EXPECT_EQ(io::csv_field("\t=1"), "'\\x09=1");
+    EXPECT_EQ(io::csv_field("\r=1"), "'\\x0d=1");
+    EXPECT_EQ(io::csv_field("SN1\nVERDICT\x1b[2J"), "SN1\\x0aVERDICT\\x1b[2J");  // one record, one line; no escape sequence
     EXPECT_EQ(io::csv_field("-0.5"), "-0.5");
     EXPECT_EQ(io::csv_field("+3"), "+3");
     EXPECT_EQ(io::csv_field("-1.25e-05"), "-1.25e-05");
