@@ -17,11 +17,12 @@ if ! scripts/vcan/with_vcan.sh out/test-run/uml scripts/test-run-demo.sh "$PWD/b
     exit 1
 fi
 echo
-echo "== emadiag trend: a reliability engineer's report for one tail number =="
+echo "== emadiag trend: a reliability engineer's report for one tail number, one trend per position =="
 SESSIONS=12
 [ "${EMADIAG_MAIN_QUICK:-0}" = 1 ] && SESSIONS=6
-echo "   ($SESSIONS monthly pre-flight sessions of a transmission whose friction rises; true FDJ crosses its"
-echo "    0.096 N m limit at day 400, 70 days after the last session; FSJ crosses 0.144 N m at day 1200)"
+echo "   ($SESSIONS monthly pre-flight sessions per elevator actuator; LH-ELEV's friction rises: its true FDJ crosses"
+echo "    the 0.096 N m limit at day 400, 70 days after the last session, FSJ 0.144 N m at day 1200; RH-ELEV's"
+echo "    rises a quarter as fast: FDJ at day 1600. Each position is trended on its own, never pooled)"
 rm -rf out/trend && mkdir -p out/trend
 ./build/src/emadiag history-sim --db out/trend/maintenance.db --tail N456EM --position LH-ELEV --sessions "$SESSIONS" --days-between 30 \
     --fdj-rate-per-100d 0.004 --fsj-rate-per-100d 0.002 --seed 3
@@ -31,8 +32,8 @@ rm -rf out/trend && mkdir -p out/trend
 echo
 echo "== emadiag report: the maintenance record of N456EM per position and serial, and its HTML report =="
 ./build/src/emadiag report --db out/trend/maintenance.db --tail N456EM --format text
-./build/src/emadiag trend --db out/trend/maintenance.db --tail N456EM --format html --out out/trend/N456EM.html
-echo "wrote out/trend/N456EM.html ($(wc -c < out/trend/N456EM.html) bytes; one self-contained file, open it in any browser)"
+./build/src/emadiag report --db out/trend/maintenance.db --tail N456EM --format html --out out/trend/N456EM.html
+echo "wrote out/trend/N456EM.html ($(wc -c < out/trend/N456EM.html) bytes; a section per position and per serial; one self-contained file, open it in any browser)"
 echo
 echo "== emadiag fleet: every tail and position, most urgent first =="
 ./build/src/emadiag history-sim --db out/trend/maintenance.db --tail N789EM --position LH-ELEV --serial 3003 --sessions "$SESSIONS" \

@@ -36,8 +36,10 @@ scripts/build.sh release
 echo "== sanitizer build (clang: ASan + UBSan, libFuzzer coverage) starts in the background: build/sanitizer-build.log =="
 nice -n 10 scripts/build.sh asan >build/sanitizer-build.log 2>&1 &
 asan_build=$!
-stage "unit tests (release)"
-ctest --test-dir build -L unit -j "$(nproc)" --output-on-failure
+stage "unit tests (release), the hostile-input suite apart"
+ctest --test-dir build -L unit -LE hostile -j "$(nproc)" --output-on-failure
+stage "the hostile-input suite (issue 21: output paths, control characters, concurrency, signals, size bounds, model and limit semantics)"
+ctest --test-dir build -L hostile -j "$(nproc)" --output-on-failure
 stage "the HTML report in a real browser (headless Chromium)"
 ctest --test-dir build -L browser --output-on-failure
 stage "the fleet server: a real PostgreSQL server (sync, kill -9 mid-sync, privileges, reports byte for byte)"

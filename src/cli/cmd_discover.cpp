@@ -1,4 +1,4 @@
-// emadiag discover RUN.csv... | --db FILE --tail T  [--json] [--out-model FILE] [--out-params FILE]
+// emadiag discover RUN.csv... | --db FILE --tail T --position POS [--serial SN] [--json] [--out-model FILE] [--out-params FILE]
 //                  [--max-effects N] [--plot FILE.svg]:
 // the residual between the run and the datasheet model with the run's estimated health, traced to
 // an effect the model lacks, that effect added and fitted by re-simulation, and the error before
@@ -16,6 +16,7 @@
 #include "emadiag/db/database.hpp"
 #include "emadiag/db/run_store.hpp"
 #include "emadiag/db/record_store.hpp"
+#include "emadiag/db/test_session_store.hpp"
 #include "emadiag/sim/simulator.hpp"
 #include "emadiag/io/output_path.hpp"
 #include "emadiag/io/text_field.hpp"
@@ -222,6 +223,63 @@ io::OutputInputs discover_inputs(const std::vector<std::string>& paths, const st
     return inputs;
 }
 
+/// The stored runs of ONE actuator (docs/discovery.md, "Findings in the maintenance record"): the
+/// valid runs of the tail's sessions at `position`, of `serial` when given; without it the position
+/// must have held one serial only. Sets `serial` to the actuator's. Throws naming what is missing or
+/// ambiguous; says on stderr which runs were left out and why. `where` gets the position's record.
+std::vector<std::pair<db::StoredRun, std::string>> actuator_runs(db::Database& database, const std::string& tail,
+                                                                 const std::string& position, std::string& serial,
+                                                                 db::StoredDiscoveryFinding& where) {
+    std::vector<std::pair<db::StoredRun, std::string>> listed;  // the run (no samples) and its serial
+    std::vector<std::string> serials;
+    std::size_t other_serial = 0, invalid = 0;
+    for (const auto& session : db::list_test_sessions(database, tail)) {
+        if (session.position.value_or("") != position) continue;
+        where.position = position;
+        where.position_ata = session.position_ata;
+        where.position_description = session.position_description;
+        for (const auto& r : session.runs) {
+            const std::string sn = !r.actuator_serial.empty() ? r.actuator_serial : session.actuator_serial;
+            if (!serial.empty() && sn != serial) {
+                ++other_serial;
+                continue;
+            }
+            if (!r.valid) {
+                ++invalid;
+                continue;
+            }
+            if (std::find(serials.begin(), serials.end(), sn) == serials.end()) serials.push_back(sn);
+            listed.emplace_back(r, sn);
+        }
+    }
+    if (other_serial > 0) std::cerr << "discover: left out " << other_serial << " run(s) of another serial at " << tail << ' ' << position << '\n';
+    if (invalid > 0) std::cerr << "discover: left out " << invalid << " run(s) stored as not valid (truncated, incomplete or aborted)\n";
+    if (listed.empty())
+        throw EmadiagError("discover: tail " + tail + " has no valid stored run at position " + position +
+                           (serial.empty() ? std::string() : " of serial " + serial));
+    if (serials.size() > 1) {
+        std::string all;
+        for (const auto& sn : serials) all += (all.empty() ? "" : ", ") + (sn.empty() ? std::string("(none)") : sn);
+        throw EmadiagError("discover: position " + position + " of " + tail + " held " + std::to_string(serials.size()) +
+                           " actuators (serials " + all + "); give --serial SN: a finding belongs to one actuator");
+    }
+    serial = serials.front();
+    return listed;
+}
+
+/// A run file given with --db/--tail must be a run of that actuator: its metadata names the serial
+/// (ema_serial_number) and, when it names a tail (tail_number), the same tail.
+void check_run_of_actuator(const Run& run, const std::string& path, const std::string& tail, const std::string& position,
+                           const std::string& serial) {
+    const std::string sn = run.meta_value("ema_serial_number").value_or("");
+    const std::string t = run.meta_value("tail_number").value_or(tail);
+    if (sn.empty() || sn != serial || t != tail) {
+        throw EmadiagError(path + ": the run names " + (sn.empty() ? std::string("no serial (no ema_serial_number key)") : "serial " + sn) +
+                           (t != tail ? " and tail " + t : std::string()) + ", not the actuator " + (serial.empty() ? "(no serial)" : serial) +
+                           " at " + tail + " " + position + "; a run of another actuator is not mixed into its finding");
+    }
+}
+
 void write_text_file(const std::string& path, const std::string& text, const io::OutputInputs& inputs) {
     io::write_output_file<EmadiagError>(path, "SVG plot", inputs, text);
 }
@@ -244,6 +302,11 @@ const bool registered = register_command(Command{
         sub.add_option("runs", *paths, "Run CSV file(s); several runs are also screened together");
         sub.add_option("--db", *db_path, "Maintenance database (with --tail)")->check(sqlite_file());
         sub.add_option("--tail", *tail, "Take the tail's stored runs from the database (oldest first)");
+        auto position = std::make_shared<std::string>();
+        auto serial = std::make_shared<std::string>();
+        auto finding_place = std::make_shared<db::StoredDiscoveryFinding>();  // tail position and its ATA reference
+        sub.add_option("--position", *position, "With --tail: the actuator's position (only its runs are used; the finding is stored under it)");
+        sub.add_option("--serial", *serial, "With --tail: the actuator's serial (needed when the position held more than one)");
         sub.add_flag("--json", *json, "Print the report as JSON (docs/discovery.md)");
         sub.add_option("--out-model", *out_model, "Write the augmented model JSON here");
         sub.add_option("--out-params", *out_params, "Write the model's simulator parameters (for simulate --params)");
@@ -258,19 +321,23 @@ const bool registered = register_command(Command{
             std::vector<std::string> labels;
             if (!tail->empty()) {
                 if (db_path->empty()) throw EmadiagError("discover --tail needs --db FILE");
+                if (position->empty())
+                    throw EmadiagError("discover --db --tail needs --position POS: a finding belongs to one actuator, and a tail has several");
                 db::Database database(*db_path);
-                for (const auto& listed : db::list_runs(database, *tail)) {
+                for (const auto& [listed, sn] : actuator_runs(database, *tail, *position, *serial, *finding_place)) {
                     runs.push_back(run_from_stored(db::load_run(database, listed.run_id)));
                     labels.push_back("run " + std::to_string(listed.run_id) + " (" + listed.started_utc + ", " +
                                      listed.sequence + ")");
                 }
-                if (runs.empty()) throw EmadiagError("discover: tail " + *tail + " has no stored runs in " + *db_path);
             } else if (!db_path->empty()) {
                 throw EmadiagError("discover --db needs --tail T");
+            } else if (!position->empty() || !serial->empty()) {
+                throw EmadiagError("discover --position and --serial go with --db FILE --tail T");
             }
             for (const auto& p : *paths) {
                 runs.push_back(read_run_csv_file(p));
                 labels.push_back(io::escape_text(p));  // a file name shown in the report: printable
+                if (!tail->empty()) check_run_of_actuator(runs.back(), p, *tail, *position, *serial);
             }
             if (runs.empty()) throw EmadiagError("discover: give run CSV file(s), or --db FILE --tail T");
             discovery::DiscoveryOptions opt;
@@ -279,15 +346,15 @@ const bool registered = register_command(Command{
             auto store_finding = [&](const discovery::FindingRecord& record) {
                 if (tail->empty()) return;
                 db::Database database(*db_path);
-                db::StoredDiscoveryFinding f;
+                db::StoredDiscoveryFinding f = *finding_place;
                 f.tail_number = *tail;
-                for (const auto& r : runs)
-                    if (f.actuator_serial.empty()) f.actuator_serial = r.meta_value("ema_serial_number").value_or("");
+                f.actuator_serial = *serial;  // every run is this actuator's (actuator_runs, check_run_of_actuator)
                 f.found_utc = io::utc_now_iso8601();
                 f.summary = record.summary;
                 f.model_json = record.model.dump();
                 const std::int64_t id = db::store_discovery_finding(database, f);
-                std::cerr << "discover: finding stored as discovery finding " << id << " of " << *tail << " in " << *db_path << '\n';
+                std::cerr << "discover: finding stored as discovery finding " << id << " of " << *tail << ' ' << *position
+                          << " serial " << *serial << " in " << *db_path << '\n';
             };
             if (runs.size() == 1) {
                 const auto t0 = std::chrono::steady_clock::now();

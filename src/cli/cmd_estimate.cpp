@@ -9,6 +9,7 @@
 #include "cli/run_file.hpp"
 #include "core/emadiag_error.hpp"
 #include "core/run_csv.hpp"
+#include "core/run_validity.hpp"
 #include "can_tool/candump_run.hpp"
 #include "discovery/augmented_model.hpp"
 #include "discovery/model_correction.hpp"
@@ -56,9 +57,15 @@ std::string fmt(double v, int digits) {
     return os.str();
 }
 
-void print_text(std::ostream& os, const std::string& path, const Run& run, const RunEstimates& out) {
+/// The loud warning for a run that may give no verdict, printed before and after the estimates.
+std::string invalid_warning(const RunValidity& v) {
+    return "WARNING: RUN NOT VALID: " + io::escape_text(v.reason) + ". The estimates are for information only; no verdict is possible from this run.";
+}
+
+void print_text(std::ostream& os, const std::string& path, const Run& run, const RunValidity& validity, const RunEstimates& out) {
     os << "run " << io::escape_text(path) << ": case " << io::escape_text(run.load_case) << ", sequence " << io::escape_text(run.sequence) << ", "
        << run.samples.size() << " samples\n";
+    if (!validity.valid) os << invalid_warning(validity) << '\n';
     for (const auto& h : out.estimates) {
         os << "\nestimator: " << h.estimator << '\n';
         for (const auto& p : h.parameters) {
@@ -93,13 +100,16 @@ void print_text(std::ostream& os, const std::string& path, const Run& run, const
                << (*z <= kZ95 ? "  agree" : "  DISAGREE") << '\n';
         }
     }
+    if (!validity.valid) os << '\n' << invalid_warning(validity) << '\n';
 }
 
-nlohmann::json to_json(const std::string& path, const Run& run, const RunEstimates& out) {
+nlohmann::json to_json(const std::string& path, const Run& run, const RunValidity& validity, const RunEstimates& out) {
     nlohmann::json j;
     j["schema"] = "emadiag-estimate";
     j["version"] = kEstimateJsonVersion;
-    j["run"] = {{"path", path}, {"case", run.load_case}, {"sequence", run.sequence}, {"samples", run.samples.size()}};
+    j["run"] = {{"path", path}, {"case", run.load_case}, {"sequence", run.sequence}, {"samples", run.samples.size()},
+                {"valid", validity.valid}};
+    if (!validity.valid) j["run"]["invalid_reason"] = validity.reason;
     j["estimates"] = nlohmann::json::array();
     for (const auto& h : out.estimates) {
         nlohmann::json e;
@@ -152,6 +162,10 @@ const bool registered = register_command(Command{
                                          std::to_string(*line) + ", so sample row N is line N + " +
                                          std::to_string(*line - 1) + ")");
             }
+            // Only a complete, valid run may give a verdict (core/run_validity.hpp): estimates of any
+            // other are printed with a warning on both streams (stderr first, before anything can fail).
+            const RunValidity validity = run_validity(run);
+            if (!validity.valid) std::cerr << "emadiag estimate: " << invalid_warning(validity) << '\n';
             std::optional<std::string> network_model = model->empty() ? std::nullopt : std::optional<std::string>(*model);
             std::optional<Run> corrected;
             std::string model_note;
@@ -181,8 +195,8 @@ const bool registered = register_command(Command{
                 out.model_files.insert(out.model_files.begin(), *model);
                 out.notes.insert(out.notes.begin(), model_note);
             }
-            if (*json) std::cout << to_json(*path, run, out).dump(2) << '\n';
-            else print_text(std::cout, *path, run, out);
+            if (*json) std::cout << to_json(*path, run, validity, out).dump(2) << '\n';
+            else print_text(std::cout, *path, run, validity, out);
             return 0;
         };
     }});

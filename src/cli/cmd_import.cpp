@@ -10,6 +10,7 @@
 #include "cli/run_file.hpp"
 
 #include "core/emadiag_error.hpp"
+#include "core/run_validity.hpp"
 #include "diagnosis/health_limits.hpp"
 #include "diagnosis/session_storage.hpp"
 #include "diagnosis/verdict.hpp"
@@ -76,14 +77,20 @@ const bool registered = register_command(Command{
             const std::string serial = !o->serial.empty() ? o->serial : run.meta_value("ema_serial_number").value_or("");
             io::check_text_field<EmadiagError>(!o->serial.empty() ? "--serial" : o->file + ": run metadata ema_serial_number", serial);
 
+            // Only a complete, valid run gives a verdict (core/run_validity.hpp); any other is stored
+            // with its samples and raw log, valid=false and the reason, and gives NO_TEST.
+            const RunValidity validity = run_validity(run);
             AssessedRun a;
             a.sequence = run.sequence;
-            a.valid = true;
-            try {
-                a.estimates = estimate_run(run);
-            } catch (const EmadiagError& e) {
-                a.valid = false;
-                a.invalid_reason = std::string("not estimated: ") + e.what();
+            a.valid = validity.valid;
+            a.invalid_reason = validity.reason;
+            if (a.valid) {
+                try {
+                    a.estimates = estimate_run(run);
+                } catch (const EmadiagError& e) {
+                    a.valid = false;
+                    a.invalid_reason = std::string("not estimated: ") + e.what();
+                }
             }
             const Assessment verdict = assess({a}, limits);
 
@@ -129,6 +136,7 @@ const bool registered = register_command(Command{
                 line << "  " << to_string(f.status);
                 std::cout << line.str() << '\n';
             }
+            if (!a.valid) std::cout << "RUN NOT VALID: " << io::escape_text(a.invalid_reason) << "; stored with valid=false, no verdict is possible\n";
             std::cout << "verdict " << to_string(verdict.verdict) << " -- " << io::escape_text(verdict.reason) << '\n';
             if (receipt.installation) std::cout << "INSTALLATION CHANGE: " << describe_installation(*receipt.installation) << '\n';
             std::cout << "stored as session " << receipt.session_id << " in " << io::escape_text(o->db) << " (chain " << receipt.content_sha256.substr(0, 16)

@@ -3,8 +3,8 @@
 // the maintenance record of one aircraft (prognostics/fleet_record.hpp, docs/fleet-record.md): per
 // position and per actuator serial the session history, each parameter's trend against flight
 // cycles and days with the fitted degradation, the limit crossing and the RUL with its 90 %
-// interval, the installations and the open discovery findings. (`trend` is the earlier one-tail
-// calendar report, kept as it was.) HTML is one self-contained file written by the rendering module
+// interval, the installations and the open discovery findings. (`trend` is the calendar view of the
+// same record, per position.) HTML is one self-contained file written by the rendering module
 // (report/record_adapter.hpp, report/html_report.hpp, docs/report-html.md).
 #include "cli/command.hpp"
 #include "cli/db_source.hpp"

@@ -1,10 +1,13 @@
-// emadiag trend --db FILE --tail N123EM [--phase pre-flight|post-flight|all] [--horizon-days 3650]
-//   [--draws 4000] [--seed S] [--json | --format text|json|html] [--out FILE]:
+// emadiag trend --db FILE --tail N123EM [--position P] [--serial S] [--phase pre-flight|post-flight|all]
+//   [--horizon-days 3650] [--draws 4000] [--seed S] [--json | --format text|json|html] [--out FILE]:
 // the reliability engineer's trend report of one aircraft from its stored test sessions
-// (prognostics/trend_report.hpp): per health parameter the measurements, the degradation model,
-// the predicted limit crossing and the remaining useful life with its 90 % interval. Text for
-// people; --json is the stable schema of docs/trend-report.md; html is one self-contained file with
-// the plots (report/html_report.hpp, docs/report-html.md).
+// (prognostics/trend_report.hpp), per actuator: each position with the serial installed there now
+// (or the one position or serial asked for), and for each health parameter the measurements, the
+// degradation model, the predicted limit crossing and the remaining useful life with its 90 %
+// interval. The sessions are grouped as `report` groups them (prognostics/fleet_record.hpp): two
+// actuators are never fitted as one line. Text for people; --json is the stable schema of
+// docs/trend-report.md; html is the maintenance record's HTML of the same positions or serial
+// (report/record_adapter.hpp, docs/report-html.md).
 #include "cli/command.hpp"
 #include "cli/db_source.hpp"
 #include "cli/output_file.hpp"
@@ -12,11 +15,11 @@
 #include "core/emadiag_error.hpp"
 #include "emadiag/db/database.hpp"
 #include "estimation/health_estimate.hpp"
+#include "prognostics/fleet_record.hpp"
 #include "prognostics/trend_report.hpp"
 #include "prognostics/utc_time.hpp"
 #include "report/html_report.hpp"
-#include "report/trend_adapter.hpp"
-
+#include "report/record_adapter.hpp"
 
 #include <cmath>
 #include <iomanip>
@@ -32,6 +35,7 @@ namespace pg = emadiag::prognostics;
 struct TrendCliOptions {
     std::string db;
     std::string tail;
+    std::string position, serial;
     std::string phase = "pre-flight";
     double horizon_days = pg::kDefaultHorizonDays;
     int draws = pg::kDefaultMonteCarloDraws;
@@ -90,29 +94,30 @@ std::string rul_text(const pg::ParameterTrend& p) {
     return "-";
 }
 
-void print_text(std::ostream& os, const pg::TrendReport& r) {
-    os << "emadiag trend: tail " << r.tail_number << ", phase " << r.phase << ": " << r.sessions_in_phase << " of " << r.sessions_total
-       << " test sessions";
-    if (r.origin_days_since_epoch) {
-        os << ", day 0 = " << r.origin_utc;
-        if (r.last_session_days_since_epoch)
-            os << ", last session day " << days(*r.last_session_days_since_epoch - *r.origin_days_since_epoch) << " ("
-               << pg::format_utc_date(*r.last_session_days_since_epoch) << ")";
+void print_series(std::ostream& os, const pg::TrendSeries& t) {
+    if (t.kind == "position")
+        os << "\nPOSITION " << t.position << ": serial " << (t.serial.empty() ? "(none recorded)" : t.serial) << " (installed now)";
+    else
+        os << "\nSERIAL " << (t.serial.empty() ? "(none recorded)" : t.serial) << ": last seen at " << t.place;
+    os << ", " << t.sessions_in_trend << " of " << t.sessions_total << " sessions in the trend";
+    if (t.origin_days_since_epoch) {
+        os << ", day 0 = " << t.origin_utc;
+        if (t.last_session_days_since_epoch)
+            os << ", last session day " << days(*t.last_session_days_since_epoch - *t.origin_days_since_epoch) << " ("
+               << pg::format_utc_date(*t.last_session_days_since_epoch) << ")";
     }
-    os << "\nmeasurements: inverse-variance mean of each session's physics findings; intervals: latest 95 %, RUL 90 % ("
-       << r.rul_options.draws << " Monte Carlo draws, seed " << r.rul_options.seed << "); horizon " << days(r.rul_options.horizon_days)
-       << " days after the last session\n";
-    for (const auto& n : r.notes) os << "note: " << n << '\n';
+    os << '\n';
+    for (const auto& n : t.notes) os << "note: " << n << '\n';
     os << '\n';
     os << std::left << std::setw(8) << "param" << std::setw(10) << "sessions" << std::setw(29) << "latest [95 %]" << std::setw(24)
        << "trend per 100 d (se)" << std::setw(12) << "model" << std::setw(12) << "crossing" << "RUL days [90 %]\n";
-    for (const auto& p : r.parameters) {
+    for (const auto& p : t.parameters) {
         os << std::left << std::setw(8) << p.series.parameter << std::setw(10) << p.series.points.size() << std::setw(29) << latest_text(p)
            << std::setw(24) << trend_text(p) << std::setw(12) << (p.has_fit ? pg::to_string(p.fits.choice.model) : "-")
            << std::setw(12) << crossing_text(p) << rul_text(p) << '\n';
     }
-    for (const auto& p : r.parameters) {
-        os << '\n' << p.series.parameter;
+    for (const auto& p : t.parameters) {
+        os << '\n' << p.series.parameter << " at " << (t.kind == "position" ? t.position : "serial " + t.serial);
         if (p.series.limit) os << " (limit " << pg::to_string(p.series.limit->side) << ' ' << num(p.series.limit->value) << ")";
         os << ": " << p.rul.summary << '\n';
         if (p.has_fit) {
@@ -148,14 +153,30 @@ void print_text(std::ostream& os, const pg::TrendReport& r) {
     }
 }
 
+void print_text(std::ostream& os, const pg::TrendReport& r) {
+    os << "emadiag trend: tail " << r.tail_number << ", phase " << r.phase << ", " << r.sessions_total << " test sessions";
+    if (!r.position_filter.empty()) os << ", position " << r.position_filter;
+    if (!r.serial_filter.empty()) os << ", serial " << r.serial_filter;
+    os << "; one trend per actuator, " << r.series.size() << " series (";
+    for (std::size_t i = 0; i < r.series.size(); ++i)
+        os << (i ? ", " : "") << (r.series[i].kind == "position" ? r.series[i].position + " " + r.series[i].serial : r.series[i].serial);
+    os << ")\nmeasurements: inverse-variance mean of each session's physics findings; intervals: latest 95 %, RUL 90 % ("
+       << r.rul_options.draws << " Monte Carlo draws, seed " << r.rul_options.seed << "); horizon " << days(r.rul_options.horizon_days)
+       << " days after the last session; day 0 is each series' first session\n";
+    for (const auto& n : r.notes) os << "note: " << n << '\n';
+    for (const auto& t : r.series) print_series(os, t);
+}
+
 const bool registered = register_command(Command{
-    "trend", "Trend report of one aircraft: per parameter the degradation trend, predicted limit crossing and remaining useful life",
+    "trend", "Trend report of one aircraft per position (or serial): per parameter the degradation trend, predicted limit crossing and remaining useful life",
     [](CLI::App& sub) -> std::function<int()> {
         auto o = std::make_shared<TrendCliOptions>();
         sub.add_option("--db", o->db, "Maintenance database with the test sessions: SQLite file, or a fleet server postgresql://...")
             ->required()
             ->check(sqlite_file_or_fleet_uri());
         sub.add_option("--tail", o->tail, "Aircraft tail number")->required();
+        sub.add_option("--position", o->position, "Only this position of the tail (default: every position, each its own trend)");
+        sub.add_option("--serial", o->serial, "Only this actuator serial: its own trend across its positions and tails");
         sub.add_option("--phase", o->phase, "Sessions of this phase: pre-flight, post-flight or all")
             ->capture_default_str()
             ->check(CLI::IsMember({"pre-flight", "post-flight", pg::kPhaseAll}));
@@ -173,16 +194,19 @@ const bool registered = register_command(Command{
             t.rul.horizon_days = o->horizon_days;
             t.rul.draws = o->draws;
             t.rul.seed = o->seed;
+            t.position = o->position;
+            t.serial = o->serial;
             db::OpenedSource database = db::open_record_source(o->db);
-            const pg::TrendReport report = pg::load_trend_report(*database.source, o->tail, t);
+            const pg::FleetRecord record = pg::load_trend_record(*database.source, o->tail, t);
+            const pg::TrendReport report = pg::trend_report_of(record, t);
             const std::string format = o->json ? "json" : o->format;
             std::ostringstream text;
             if (format == "json") {
                 text << pg::to_json(report).dump(2) << '\n';
             } else if (format == "html") {
-                const report::ReportDocument doc = report::from_trend_report(
-                    report, database.source->sessions_of_tail(o->tail), {pg::now_utc_time(), EMADIAG_VERSION, o->db});
-                text << report::render_html(doc);
+                // The maintenance record's page of the same positions (or serial): per position, never pooled.
+                text << report::render_html(report::from_fleet_record(pg::select_views(record, t.position, t.serial),
+                                                                      {pg::now_utc_time(), EMADIAG_VERSION, o->db}));
             } else {
                 print_text(text, report);
             }

@@ -2,6 +2,7 @@
 #include "emadiag/io/bounded_line.hpp"
 
 #include "core/emadiag_error.hpp"
+#include "core/run_validity.hpp"
 #include "emadiag/io/output_path.hpp"
 
 #include <charconv>
@@ -86,6 +87,7 @@ Run read_run_csv(std::istream& in, const std::string& name) {
     std::vector<std::string> header;
     std::size_t header_line = 0;
     std::size_t meta_lines = 0, bad_rows = 0;
+    std::vector<std::pair<std::string, std::size_t>> meta_line;  // key -> the file line that set it
     bool too_long = false;
     while (io::read_bounded_line(in, line, kCsvMaxLineBytes, too_long)) {
         ++line_no;
@@ -113,7 +115,10 @@ Run read_run_csv(std::istream& in, const std::string& name) {
             }
             const std::string key = trim(body.substr(0, eq));
             if (run.meta_value(key)) problem(line_no, "duplicate metadata key '" + key + "'");
-            run.set_meta(key, trim(body.substr(eq + 1)));
+            const std::string value = trim(body.substr(eq + 1));
+            if (const auto bad = metadata_value_problem(key, value)) problem(line_no, "metadata " + *bad);
+            run.set_meta(key, value);
+            meta_line.emplace_back(key, line_no);
             continue;
         }
         if (header.empty()) {
@@ -156,6 +161,11 @@ Run read_run_csv(std::istream& in, const std::string& name) {
                 ok = false;
                 continue;
             }
+            if (const auto impossible = sample_value_problem(header[c], x)) {
+                problem(line_no, "column '" + header[c] + "': " + *impossible);
+                ok = false;
+                continue;
+            }
             if (c < 6) {
                 v[c] = x;
             } else {
@@ -172,6 +182,11 @@ Run read_run_csv(std::istream& in, const std::string& name) {
     }
     if (header.empty()) problem(line_no, "no header row (expected t_s,current_A,...)");
     (void)header_line;
+    const auto line_of = [&](const std::string& key) -> std::size_t {
+        for (const auto& [k, l] : meta_line)
+            if (k == key) return l;
+        return 1;
+    };
     auto need = [&](const char* key, double& dst, bool positive) {
         const auto v = run.meta_value(key);
         if (!v) {
@@ -180,7 +195,7 @@ Run read_run_csv(std::istream& in, const std::string& name) {
         }
         double x;
         if (!parse_double(*v, x) || !std::isfinite(x) || (positive && !(x > 0))) {
-            problem(1, std::string("metadata ") + key + "=" + *v + " is not a positive number");
+            problem(line_of(key), std::string("metadata ") + key + "=" + *v + " is not a positive number");
             return;
         }
         dst = x;

@@ -4,6 +4,7 @@
 #include "estimation/dataset.hpp"
 #include "emadiag/io/bounded_json.hpp"
 #include "estimation/health_estimate.hpp"
+#include "emadiag/sim/ema_params.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -11,6 +12,9 @@
 
 namespace emadiag {
 namespace {
+
+/// An efficiency is a fraction of the power that goes through: a limit on one lies in (0, 1].
+constexpr double kMaxEfficiency = 1.0;
 
 /// Friction may not rise above its limit; efficiency may not fall below it.
 LimitKind natural_kind(const std::string& parameter) {
@@ -56,6 +60,16 @@ HealthLimits HealthLimits::from_json(const nlohmann::json& j, const std::string&
         const auto& x = v.at(want);
         if (!x.is_number() || !std::isfinite(x.get<double>()) || x.get<double>() <= 0) {
             problems.push_back(key + "." + want + ": " + x.dump() + " is not a finite positive number");
+            continue;
+        }
+        // A friction torque the motor cannot overcome (T_max, ema-reference.md section 1), or an
+        // efficiency above 1, is no limit of this actuator.
+        const bool friction = natural_kind(key) == LimitKind::Max;
+        const double most = friction ? sim::EmaParams::datasheet().t_max_nm : kMaxEfficiency;
+        if (x.get<double>() > most) {
+            problems.push_back(key + "." + want + ": " + x.dump() + (friction ? " N m exceeds the motor torque saturation T_max = "
+                                                                              : " exceeds the largest possible efficiency, ") +
+                               nlohmann::json(most).dump() + (friction ? " N m (a friction torque lies in (0, T_max])" : " (an efficiency lies in (0, 1])"));
             continue;
         }
         it->limit = x.get<double>();

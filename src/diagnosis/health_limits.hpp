@@ -27,7 +27,8 @@ struct HealthLimits {
     /// {"FDJ_Nm": {"max": 0.09}, "eta_A": {"min": 0.7}, ...}; parameters left out keep their
     /// datasheet limit. Throws EmadiagError naming the file, the key and the value on anything else
     /// (an unknown parameter, both or neither of max/min, a non-finite or non-positive limit, the
-    /// wrong direction such as a minimum on friction).
+    /// wrong direction such as a minimum on friction, an efficiency above 1, a friction torque above
+    /// the motor's T_max, a key repeated in the file).
     [[nodiscard]] static HealthLimits load(const std::string& path);
     [[nodiscard]] static HealthLimits from_json(const nlohmann::json& j, const std::string& where);
 

@@ -1,6 +1,7 @@
 #include "diagnosis/session_storage.hpp"
 
 #include "core/emadiag_error.hpp"
+#include "core/run_validity.hpp"
 #include "diagnosis/positions.hpp"
 #include "emadiag/db/sha256.hpp"
 #include "emadiag/io/text_field.hpp"
@@ -25,7 +26,7 @@ db::StoredRun to_stored_run(const Run& run, const std::string& tail, const std::
     s.j_kgm2 = run.constants.j_kgm2;
     s.tau = run.constants.tau;
     s.sample_period_s = run.constants.sample_period_s;
-    s.valid = run.meta_value("valid").value_or("true") == "true";
+    s.valid = run_validity(run).valid;  // the callers that judge the run set valid and the note themselves
     s.status_note = run.meta_value("status").value_or("");
     nlohmann::json meta = nlohmann::json::object();
     for (const auto& [k, v] : run.meta) meta[k] = v;

@@ -1,5 +1,7 @@
 #include "diagnosis/test_run.hpp"
 
+#include "core/run_validity.hpp"
+
 #include "diagnosis/session_storage.hpp"
 
 #include "can_tool/candump_run.hpp"
@@ -48,8 +50,9 @@ std::string read_bytes(const std::string& path) {
 db::StoredRun to_stored(const TestRunRecord& r, const std::string& tail, const std::string& started_utc) {
     db::StoredRun s = to_stored_run(r.outcome.run, tail, started_utc, r.estimates);
     s.source = r.outcome.run.meta_value("source").value_or("emadiag test-run") + " " + r.outcome.run.meta_value("bus").value_or("");
-    s.valid = r.outcome.valid;
-    s.status_note = r.outcome.valid ? r.outcome.status : r.outcome.status + ": " + r.outcome.invalid_reason;
+    const RunValidity v = run_validity(r.outcome.run);  // the one decision (core/run_validity.hpp), with the recorder's
+    s.valid = r.outcome.valid && v.valid;
+    s.status_note = !r.outcome.valid ? r.outcome.status + ": " + r.outcome.invalid_reason : v.valid ? r.outcome.status : v.reason;
     if (r.attempt > 1) s.status_note += " (attempt " + std::to_string(r.attempt) + ")";
     s.raw_log_format = "candump";
     s.raw_log = read_bytes(r.log_path);
@@ -76,8 +79,10 @@ Assessment assess_records(const std::vector<TestRunRecord>& runs, const HealthLi
         if (i + 1 < runs.size() && runs[i + 1].sequence == r.sequence) continue;
         AssessedRun a;
         a.sequence = r.sequence;
-        a.valid = r.outcome.valid && r.estimate_error.empty();
+        const RunValidity v = r.outcome.valid ? run_validity(r.outcome.run) : RunValidity{};
+        a.valid = r.outcome.valid && v.valid && r.estimate_error.empty();
         a.invalid_reason = !r.outcome.valid ? r.outcome.status + (r.outcome.invalid_reason.empty() ? "" : ": " + r.outcome.invalid_reason)
+                           : !v.valid       ? v.reason
                                             : "not estimated: " + r.estimate_error;
         a.estimates = r.estimates;
         assessed.push_back(std::move(a));

@@ -19,6 +19,57 @@ namespace {
 
 constexpr const char* kFormatName = "emadiag-network";
 constexpr double kEq4DerivativeStep = 1e-6;
+/// The activations the network implements (Network::forward): what a model file may declare.
+constexpr const char* kHiddenTransfer = "tansig";
+constexpr const char* kOutputTransfer = "satlins";
+/// A calibrated standard error, in normalised units, lies in (0, kMaxStdErrorNormalised]: 1 is the
+/// whole section-8 range of the parameter, so a larger one says nothing, and zero or less is none.
+constexpr double kMaxStdErrorNormalised = 1.0;
+/// Problems listed in one error (all are counted).
+constexpr std::size_t kMaxListedModelProblems = 20;
+
+std::string num(double v) {
+    std::ostringstream os;
+    os.precision(10);
+    os << v;
+    return os.str();
+}
+
+/// The semantic checks of a model file (issue 21 item 3): each problem names the field and value.
+std::vector<std::string> model_problems(const nlohmann::json& j, const NetworkModel& m) {
+    std::vector<std::string> out;
+    const auto& net = j.at("network");
+    const struct { const char* field; const char* expected; } transfers[] = {{"hidden_transfer", kHiddenTransfer},
+                                                                              {"output_transfer", kOutputTransfer}};
+    for (const auto& t : transfers) {
+        if (net.contains(t.field) && (!net.at(t.field).is_string() || net.at(t.field).get<std::string>() != t.expected))
+            out.push_back(std::string("network.") + t.field + " is " + net.at(t.field).dump() + ", expected \"" + t.expected +
+                          "\" (the only one the network implements)");
+    }
+    for (std::size_t o = 0; o < m.std_error_normalised.size(); ++o) {
+        const double se = m.std_error_normalised[o];
+        if (!(std::isfinite(se) && se > 0 && se <= kMaxStdErrorNormalised))
+            out.push_back("std_error_normalised[" + std::to_string(o) + "] (" +
+                          (o < m.spec.outputs.size() ? m.spec.outputs[o] : std::string("?")) + ") = " + num(se) +
+                          " is not in (0, " + num(kMaxStdErrorNormalised) + "] (normalised units: 1 is the whole section-8 range)");
+    }
+    for (std::size_t a = 0; a < m.spec.outputs.size(); ++a)
+        for (std::size_t b = 0; b < a; ++b)
+            if (m.spec.outputs[a] == m.spec.outputs[b])
+                out.push_back("spec.outputs[" + std::to_string(a) + "] \"" + m.spec.outputs[a] + "\" repeats spec.outputs[" +
+                              std::to_string(b) + "]");
+    std::size_t bad_inputs = 0;
+    for (Eigen::Index i = 0; i < m.input_norm.min.size() && i < m.input_norm.max.size(); ++i) {
+        const double lo = m.input_norm.min(i), hi = m.input_norm.max(i);
+        if (std::isfinite(lo) && std::isfinite(hi) && hi > lo) continue;
+        if (bad_inputs++ < kMaxListedModelProblems)
+            out.push_back("input_normalisation: input " + std::to_string(i) + " has min " + num(lo) + ", max " + num(hi) +
+                          " (max must exceed min)");
+    }
+    if (bad_inputs > kMaxListedModelProblems)
+        out.push_back("input_normalisation: ... " + std::to_string(bad_inputs - kMaxListedModelProblems) + " more inputs with max <= min");
+    return out;
+}
 
 std::string lower(std::string s) {
     std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
@@ -81,6 +132,12 @@ NetworkModel NetworkModel::from_json(const nlohmann::json& j, const std::string&
                            ", network inputs " + std::to_string(m.network.inputs()) + ", normalisation " +
                            std::to_string(m.input_norm.min.size()) + ", outputs " + std::to_string(outputs) +
                            ", std errors " + std::to_string(m.std_error_normalised.size()));
+    }
+    const std::vector<std::string> problems = model_problems(j, m);
+    if (!problems.empty()) {
+        std::string msg = where + ": " + std::to_string(problems.size()) + " problem(s) in the network model:";
+        for (const auto& p : problems) msg += "\n  " + p;
+        throw EmadiagError(msg);
     }
     return m;
 }

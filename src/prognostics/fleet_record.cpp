@@ -13,7 +13,6 @@ namespace emadiag::prognostics {
 namespace {
 
 using json = nlohmann::ordered_json;
-constexpr const char* kNoPosition = "(none)";
 
 /// estimate_rul words its summary in days; on the cycles axis the same numbers are cycles.
 std::string in_cycles(std::string s) {
@@ -66,6 +65,10 @@ void fill_trends(HistoryView& v, const std::vector<const db::StoredTestSession*>
     ViewAxes axes;
     axes.days = session_days(picked);
     axes.origin_days = axes.days.empty() ? 0.0 : *std::min_element(axes.days.begin(), axes.days.end());
+    if (!axes.days.empty()) {
+        v.trend_first_days = axes.origin_days;
+        v.trend_last_days = *std::max_element(axes.days.begin(), axes.days.end());
+    }
     // The actuator's cycles: aircraft cycles since the view's first session, summed over the tails it
     // was on (the cycles between a removal and the next installation are not known: none).
     double total = 0;
@@ -260,12 +263,20 @@ FleetRecord build_fleet_record(db::RecordSource& database, const std::string& ta
         for (const auto& i : r.installations)
             if (i.position == position) v.installations.push_back(i);
         std::vector<const db::StoredTestSession*> trend;
-        for (const auto& s : sessions)
-            if (s.actuator_serial == v.current_serial) trend.push_back(&s);
-        if (trend.size() < sessions.size())
+        std::vector<std::string> earlier;  // the other serials seen here, in order of first session
+        for (const auto& s : sessions) {
+            if (s.actuator_serial == v.current_serial)
+                trend.push_back(&s);
+            else if (std::find(earlier.begin(), earlier.end(), s.actuator_serial) == earlier.end())
+                earlier.push_back(s.actuator_serial);
+        }
+        if (trend.size() < sessions.size()) {
+            std::string names;
+            for (const auto& e : earlier) names += (names.empty() ? "" : ", ") + (e.empty() ? std::string("(unknown)") : e);
             v.notes.push_back("trends are those of serial " + (v.current_serial.empty() ? std::string("(unknown)") : v.current_serial) +
                               ", installed now: " + std::to_string(sessions.size() - trend.size()) +
-                              " session(s) of earlier serials are in the history only");
+                              " session(s) of earlier serials (" + names + ") are in the history only; each serial has its own trend");
+        }
         fill_trends(v, trend, options);
         v.sessions = SharedList<db::StoredTestSession>(std::move(sessions));
         r.positions.push_back(std::move(v));
@@ -333,6 +344,8 @@ FleetRecord build_fleet_record(db::RecordSource& database, const std::string& ta
             if (pv.trend_session_ids == ids) same = &pv;
         if (same != nullptr) {
             v.trend_session_ids = ids;
+            v.trend_first_days = same->trend_first_days;
+            v.trend_last_days = same->trend_last_days;
             v.parameters = same->parameters;
         } else {
             std::vector<const db::StoredTestSession*> ptrs;

@@ -25,6 +25,8 @@ namespace emadiag::prognostics {
 
 inline constexpr const char* kReportSchema = "emadiag-report";
 inline constexpr int kReportSchemaVersion = 1;
+/// The position of sessions stored without one.
+inline constexpr const char* kNoPosition = "(none)";
 inline constexpr const char* kAxisCycles = "cycles";
 inline constexpr const char* kAxisDays = "days";
 /// The horizon of a crossing on the cycles axis, after the last session.
@@ -87,6 +89,8 @@ struct HistoryView {
     std::string current_place;               ///< serials: "N123EM LH-ELEV", where it was last seen
     SharedList<db::StoredTestSession> sessions;  ///< every session of the view, oldest first (amended ones left out)
     std::vector<std::int64_t> trend_session_ids;  ///< the sessions the trends are fitted to
+    /// Days since 1970 of the first and the last of them (the days axis' t = 0 and the last session).
+    std::optional<double> trend_first_days, trend_last_days;
     std::vector<db::StoredInstallation> installations;
     SharedList<ParameterHistory> parameters;  ///< FDJ_Nm, FSJ_Nm, eta_O, eta_A
     std::string last_verdict;

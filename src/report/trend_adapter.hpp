@@ -1,9 +1,10 @@
 #pragma once
-// Today's trend report of one tail (prognostics::TrendReport) as a ReportDocument: one position "ALL"
-// holding every session of the tail, time axis in dates, RUL in days. The fit is sampled from the
-// first session to past the last (far enough to show the crossing when it is near), with its 90 %
-// band from the fit's covariance (the same uncertainty the RUL interval is drawn from).
-#include "emadiag/db/test_session_store.hpp"
+// What a trend (prognostics::ParameterTrend) needs to become a plot of the HTML report: the fit
+// sampled from the first session to past the last (far enough to show the crossing when it is near),
+// with its 90 % band from the fit's covariance (the same uncertainty the RUL interval is drawn from),
+// each parameter's datasheet nominal and unit. The documents themselves are made per position and
+// per serial from the maintenance record (record_adapter.hpp), for `report` and `trend` alike: a tail's
+// sessions are never pooled into one section.
 #include "prognostics/trend_report.hpp"
 #include "report/report_document.hpp"
 
@@ -12,10 +13,6 @@
 
 namespace emadiag::report {
 
-/// The position name the adapter uses for a tail whose sessions carry no position.
-inline constexpr const char* kAllPositions = "ALL";
-/// Flight controls (ATA chapter 27) for the whole aircraft.
-inline constexpr const char* kAta27 = "ATA 27 (flight controls)";
 /// The fit band's two-sided level and its normal quantile.
 inline constexpr double kFitBandLevel = 0.90;
 inline constexpr double kZ90 = 1.6448536269514722;
@@ -41,11 +38,5 @@ struct TrendAdapterOptions {
 
 /// The fit of `p` sampled on the report's date axis (x = origin + t days). Empty without a fit.
 [[nodiscard]] std::optional<ReportCurve> sample_fit(const prognostics::ParameterTrend& p, double origin_days);
-
-/// The document. `sessions` are the tail's stored test sessions (oldest first, as
-/// db::list_test_sessions gives them) for the session history and the installed serials; the
-/// trends come from `trend`.
-[[nodiscard]] ReportDocument from_trend_report(const prognostics::TrendReport& trend, const std::vector<db::StoredTestSession>& sessions,
-                                               const TrendAdapterOptions& options);
 
 }  // namespace emadiag::report

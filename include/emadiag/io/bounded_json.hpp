@@ -10,7 +10,9 @@
 #include <fstream>
 #include <optional>
 #include <string>
+#include <set>
 #include <string_view>
+#include <vector>
 
 namespace emadiag::io {
 
@@ -19,8 +21,8 @@ inline constexpr int kMaxJsonDepth = 64;
 /// Largest JSON file accepted (the shipped network models are about 0.55 MB).
 inline constexpr std::size_t kMaxJsonBytes = std::size_t{16} << 20;
 
-/// Parses `text`; on failure returns nullopt with the reason (the limit by name, or the parser's
-/// message with its byte position) in `error`.
+/// Parses `text`; on failure returns nullopt with the reason (the limit by name, the parser's
+/// message with its byte position, or a key repeated in one object with the object's path) in `error`.
 [[nodiscard]] inline std::optional<nlohmann::json> parse_bounded_json(std::string_view text, std::string& error) {
     if (text.size() > kMaxJsonBytes) {
         error = "JSON text of " + std::to_string(text.size()) + " bytes exceeds the limit kMaxJsonBytes = " +
@@ -47,8 +49,41 @@ inline constexpr std::size_t kMaxJsonBytes = std::size_t{16} << 20;
             --depth;
         }
     }
+    // A repeated key in an object is refused (issue 21): nlohmann keeps the last one silently, so
+    // {"eta_O": {"min": 0.8}, "eta_O": {"min": 0.1}} would read as a limit nobody sees in the file.
+    struct Level {
+        bool object = false;
+        std::string path, last_key;
+        std::set<std::string> keys;  // a set: a 16 MB object of distinct keys stays O(n log n)
+    };
+    std::vector<Level> levels;
+    std::string duplicate;
+    const nlohmann::json::parser_callback_t check_keys = [&](int, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
+        using E = nlohmann::json::parse_event_t;
+        if (event == E::object_start || event == E::array_start) {
+            Level l;
+            l.object = event == E::object_start;
+            if (!levels.empty()) l.path = levels.back().path + "/" + (levels.back().object ? levels.back().last_key : std::string("*"));
+            levels.push_back(std::move(l));
+        } else if (event == E::object_end || event == E::array_end) {
+            if (!levels.empty()) levels.pop_back();
+        } else if (event == E::key && !levels.empty() && parsed.is_string()) {
+            Level& l = levels.back();
+            l.last_key = parsed.get<std::string>();
+            if (!l.keys.insert(l.last_key).second && duplicate.empty()) {
+                duplicate = "duplicate key \"" + l.last_key + "\" in the object at " + (l.path.empty() ? "/" : l.path) +
+                            ": a JSON object may not repeat a key (the last one would silently win)";
+            }
+        }
+        return true;
+    };
     try {
-        return nlohmann::json::parse(text.begin(), text.end());
+        nlohmann::json j = nlohmann::json::parse(text.begin(), text.end(), check_keys);
+        if (!duplicate.empty()) {
+            error = duplicate;
+            return std::nullopt;
+        }
+        return j;
     } catch (const nlohmann::json::exception& e) {
         // parse_error, and out_of_range 406 for a number beyond double (1e999): both bad input.
         error = std::string("not valid JSON: ") + e.what();

@@ -78,8 +78,12 @@ TEST_F(TrendCli, JsonSlopeAndRulIntervalAgreeWithTheTrueDrift) {
     ASSERT_EQ(r.exit_code, 0) << r.output;
     const auto j = nlohmann::json::parse(r.output);
     EXPECT_EQ(j.at("schema"), "emadiag-trend");
-    EXPECT_EQ(j.at("sessions").at("in_phase"), kSessions);
-    const auto& fdj = j.at("parameters").at(0);
+    ASSERT_EQ(j.at("series").size(), 1u);  // sessions stored without a position: one position, "(none)"
+    const auto& series = j.at("series").at(0);
+    EXPECT_EQ(series.at("position"), "(none)");
+    EXPECT_EQ(series.at("serial"), "SIM-N123EM");
+    EXPECT_EQ(series.at("sessions").at("in_trend"), kSessions);
+    const auto& fdj = series.at("parameters").at(0);
     ASSERT_EQ(fdj.at("parameter"), "FDJ_Nm");
     ASSERT_EQ(fdj.at("status"), "predicted") << fdj.dump(2);
     EXPECT_EQ(fdj.at("points").size(), static_cast<std::size_t>(kSessions));
@@ -95,15 +99,16 @@ TEST_F(TrendCli, JsonSlopeAndRulIntervalAgreeWithTheTrueDrift) {
     EXPECT_EQ(fdj.at("limit").at("kind"), "max");
     EXPECT_DOUBLE_EQ(fdj.at("limit").at("value").get<double>(), kFdjLimitNm);
     // FSJ does not drift: no crossing; eta is not identifiable on the ground (case A).
-    EXPECT_EQ(j.at("parameters").at(1).at("status"), "no_crossing");
-    EXPECT_EQ(j.at("parameters").at(2).at("status"), "insufficient_data");
+    EXPECT_EQ(series.at("parameters").at(1).at("status"), "no_crossing");
+    EXPECT_EQ(series.at("parameters").at(2).at("status"), "insufficient_data");
 }
 
 TEST_F(TrendCli, TextReportHasTheTableAndTheReasons) {
     ASSERT_EQ(history_.exit_code, 0) << history_.output;
     const Result r = run("trend --db " + db() + " --tail N123EM --seed 3");
     ASSERT_EQ(r.exit_code, 0) << r.output;
-    EXPECT_THAT(r.output, AllOf(HasSubstr("tail N123EM, phase pre-flight: 8 of 8 test sessions"), HasSubstr("RUL days [90 %]"),
+    EXPECT_THAT(r.output, AllOf(HasSubstr("tail N123EM, phase pre-flight, 8 test sessions"),
+                                HasSubstr("POSITION (none): serial SIM-N123EM (installed now), 8 of 8 sessions in the trend"), HasSubstr("RUL days [90 %]"),
                                 HasSubstr("FDJ_Nm  8"), HasSubstr("crossing predicted at day"), HasSubstr("seed 3"),
                                 HasSubstr("insufficient data (0 sessions; need >= 3)"), HasSubstr("no crossing predicted within the horizon")));
 }

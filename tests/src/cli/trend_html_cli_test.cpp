@@ -53,7 +53,7 @@ TEST_F(TrendHtmlCli, WritesOneSelfContainedFileWithThePlots) {
     EXPECT_EQ(html.rfind("<!DOCTYPE html>", 0), 0u);
     EXPECT_EQ(count(html, "<svg"), 4u);
     EXPECT_EQ(count(html, "class=\"errorbar\""), 12u);  // FDJ and FSJ, 6 sessions each
-    EXPECT_THAT(html, AllOf(HasSubstr("Position ALL"), HasSubstr("Session history (6)"), HasSubstr(">crossing "), Not(HasSubstr("<script"))));
+    EXPECT_THAT(html, AllOf(HasSubstr("Position (none)"), Not(HasSubstr("Position ALL")), HasSubstr("Session history (6)"), HasSubstr(">crossing "), Not(HasSubstr("<script"))));
     EXPECT_FALSE(std::filesystem::exists(out + ".tmp"));
 }
 

@@ -25,6 +25,7 @@
 
 namespace fs = std::filesystem;
 using namespace emadiag;
+using ::testing::AllOf;
 using ::testing::HasSubstr;
 using ::testing::ThrowsMessage;
 
@@ -74,8 +75,11 @@ TEST(CsvLimits, NonFiniteCellsAndConstantsAreRefused) {
     head.replace(head.find("0.0005"), 6, "inf");
     EXPECT_THAT([&] { (void)read_csv(head + "0.0005,1,2,3,4,5\n"); },
                 ThrowsMessage<EmadiagError>(HasSubstr("sample_period_s=inf is not a positive number")));
-    // Enormous but finite values are data: read as they are.
-    EXPECT_EQ(read_csv(kCsvHead + "0.0005,1e308,-1e308,3,4,5\n").samples.at(0).current_a, 1e308);
+    // Enormous but finite values are no measurement of this actuator (issue 21): refused with the
+    // line, the column and the value (core/run_validity.hpp, kImpossibleMargin x the datasheet).
+    EXPECT_THAT([&] { (void)read_csv(kCsvHead + "0.0005,1e308,-1e308,3,4,5\n"); },
+                ThrowsMessage<EmadiagError>(AllOf(HasSubstr("column 'current_A': current_A = 1e+308 is physically impossible"),
+                                                  HasSubstr("column 'speed_rad_s': speed_rad_s = -1e+308 is physically impossible"))));
 }
 
 TEST(CandumpLimits, LongLinesAndManyBadLines) {
@@ -171,11 +175,7 @@ TEST(JsonLimits, NonFiniteNegativeAndEnormousLimitsAreRefused) {
         std::string error;
         const auto j = io::parse_bounded_json(std::string("{\"FDJ_Nm\": {\"max\": ") + v + "}}", error);
         if (!j) continue;  // a parse error is a clean refusal too
-        if (std::string(v) == "1e308") {
-            // Finite and positive: a (silly) limit the file may set; the value is kept exactly.
-            EXPECT_EQ(HealthLimits::from_json(*j, "l.json").find("FDJ_Nm")->limit, 1e308);
-            continue;
-        }
+        // 1e308 is finite and positive, but no friction limit: the motor cannot exceed T_max (issue 21).
         EXPECT_THROW((void)HealthLimits::from_json(*j, "l.json"), EmadiagError) << v;
     }
 }

@@ -1,11 +1,13 @@
 // The HTML report: self-contained (no script, no URL, the CSP), every stored string escaped, the
-// plots and tables per section, bad numbers named; and the adapter from today's trend report
-// (sessions in memory, an exact drift whose crossing is known).
+// plots and tables per section, bad numbers named; and the document of a maintenance record on the
+// days axis (sessions in an in-memory database, an exact drift whose crossing is known).
 #include "core/emadiag_error.hpp"
 #include "emadiag/db/test_session_store.hpp"
-#include "prognostics/trend_report.hpp"
+#include "emadiag/db/database.hpp"
+#include "prognostics/fleet_record.hpp"
 #include "prognostics/utc_time.hpp"
 #include "report/html_report.hpp"
+#include "report/record_adapter.hpp"
 #include "report/trend_adapter.hpp"
 
 #include <gmock/gmock.h>
@@ -46,37 +48,42 @@ db::StoredFinding fdj(double value, double se) {
     return f;
 }
 
-/// 8 sessions every 30 days from 2026-01-05, FDJ 0.08 + 4e-5 t exactly: crossing at day 400.
-std::vector<db::StoredTestSession> history(const std::string& tail, const std::string& serial) {
-    std::vector<db::StoredTestSession> out;
+/// 8 sessions of LH-ELEV (serial SN-1) every 30 days from 2026-01-05, FDJ 0.08 + 4e-5 t exactly:
+/// crossing at day 400.
+void store_history(db::Database& database) {
     const double start = pg::parse_utc_days_or_throw("2026-01-05T08:00:00Z", "start");
     for (int i = 0; i < 8; ++i) {
         db::StoredTestSession s;
-        s.session_id = i + 1;
-        s.tail_number = tail;
-        s.actuator_serial = i < 5 ? serial : serial + "-B";
+        s.tail_number = "N123EM";
+        s.position = "LH-ELEV";
+        s.position_ata = "27-30";
+        s.actuator_serial = "SN-1";
         s.phase = "pre-flight";
         s.started_utc = pg::format_utc_time(start + 30.0 * i);
         s.verdict = "SERVICEABLE";
         s.verdict_note = "note " + kEvil;
         s.findings.push_back(fdj(0.08 + 4e-5 * 30.0 * i, 0.0005));
-        out.push_back(s);
+        (void)db::store_test_session(database, s);
     }
-    return out;
 }
 
-ReportDocument adapted(const std::string& tail = "N123EM", const std::string& serial = "SN-1") {
-    const auto sessions = history(tail, serial);
-    const pg::TrendReport trend = pg::build_trend_report(tail, sessions, {});
-    return from_trend_report(trend, sessions, {"2026-11-24T10:00:00Z", "0.1.0", "maintenance.db"});
+/// The maintenance record's document of that history (what `report` and `trend --format html`
+/// render), with its one position section (the serial's section, the same trends, left out).
+ReportDocument adapted() {
+    db::Database database(":memory:");
+    store_history(database);
+    ReportDocument d = from_fleet_record(pg::build_fleet_record(database, "N123EM", {}), {"2026-11-24T10:00:00Z", "0.1.0", "maintenance.db"});
+    d.serials.clear();
+    return d;
 }
 
-TEST(TrendAdapter, OnePositionWithTheTrendsAndTheHealth) {
+TEST(DaysAxisDocument, OnePositionWithTheTrendsAndTheHealth) {
     const ReportDocument d = adapted();
     EXPECT_EQ(d.tail_number, "N123EM");
+    EXPECT_EQ(d.time_axis, TimeAxis::Date);  // no session carries cycles
     ASSERT_EQ(d.positions.size(), 1u);
     const ReportSection& s = d.positions[0];
-    EXPECT_EQ(s.name, "ALL");
+    EXPECT_EQ(s.name, "LH-ELEV");
     EXPECT_EQ(s.sessions.size(), 8u);
     ASSERT_EQ(s.parameters.size(), 4u);
     const ReportParameter& p = s.parameters[0];
@@ -92,14 +99,14 @@ TEST(TrendAdapter, OnePositionWithTheTrendsAndTheHealth) {
     EXPECT_NEAR(*p.health.index, 0.475, 1e-9);
     EXPECT_EQ(s.health.index_parameter, "FDJ_Nm");
     EXPECT_NE(s.health.status, HealthStatus::NoData);
-    // Two serials seen: two installations, the first ended when the second was first seen.
-    ASSERT_EQ(s.installations.size(), 2u);
+    // One serial, installed since the first session.
+    ASSERT_EQ(s.installations.size(), 1u);
     EXPECT_EQ(s.installations[0].serial, "SN-1");
-    EXPECT_EQ(s.installations[0].to_utc, "2026-06-04T08:00:00Z");
-    EXPECT_EQ(s.current, "SN-1-B");
+    EXPECT_EQ(s.installations[0].from_utc, "2026-01-05T08:00:00Z");
+    EXPECT_EQ(s.current, "SN-1");
 }
 
-TEST(TrendAdapter, FitCurveAndBandFollowTheFit) {
+TEST(DaysAxisDocument, FitCurveAndBandFollowTheFit) {
     const ReportDocument d = adapted();
     const ReportParameter& p = d.positions[0].parameters[0];
     ASSERT_TRUE(p.fit);
@@ -153,8 +160,11 @@ TEST(HtmlReport, OnePlotPerParameterWithItsParts) {
 }
 
 TEST(HtmlReport, EveryStoredStringIsEscaped) {
-    ReportDocument d = adapted(kEvil, kEvil);
+    ReportDocument d = adapted();
+    d.tail_number = kEvil;
     ReportSection& s = d.positions[0];
+    s.current = kEvil;
+    for (auto& x : s.sessions) x.serial = x.tail_number = kEvil;
     s.name = kEvil;
     s.ata_reference = kEvil;
     s.notes.push_back(kEvil);
@@ -186,14 +196,14 @@ TEST(HtmlReport, BadNumberNamesSectionParameterAndPoint) {
     ReportDocument d = adapted();
     d.positions[0].parameters[0].points[3].std_error = std::nan("");
     EXPECT_THAT([&] { (void)render_html(d); },
-                ThrowsMessage<EmadiagError>(HasSubstr("position \"ALL\" parameter \"FDJ_Nm\" points[3].std_error = nan is not a finite number")));
+                ThrowsMessage<EmadiagError>(HasSubstr("position \"LH-ELEV\" parameter \"FDJ_Nm\" points[3].std_error = nan is not a finite number")));
 }
 
 TEST(HtmlReport, BadFitIsNamed) {
     ReportDocument d = adapted();
     d.positions[0].parameters[0].fit->upper[5] = std::numeric_limits<double>::infinity();
     EXPECT_THAT([&] { (void)render_html(d); },
-                ThrowsMessage<EmadiagError>(HasSubstr("position \"ALL\" parameter \"FDJ_Nm\" fit[5].upper = inf is not a finite number")));
+                ThrowsMessage<EmadiagError>(HasSubstr("position \"LH-ELEV\" parameter \"FDJ_Nm\" fit[5].upper = inf is not a finite number")));
     d = adapted();
     d.positions[0].parameters[0].fit->lower[7] = 1.0;
     EXPECT_THAT([&] { (void)render_html(d); }, ThrowsMessage<EmadiagError>(HasSubstr("fit[7]: the band [1, ")));
