@@ -195,7 +195,9 @@ public:
         check_output_path<Error>(path_, what_, inputs);
         const std::filesystem::path target(path_);
         const std::filesystem::path dir = target.has_parent_path() ? target.parent_path() : std::filesystem::path(".");
-        std::string name = (dir / ("." + target.filename().string() + ".XXXXXX")).string();
+        std::string leaf(".");  // ".NAME.XXXXXX" (appended, not "." + name: GCC 12 warns a false -Wrestrict on that)
+        leaf.append(target.filename().string()).append(".XXXXXX");
+        std::string name = (dir / leaf).string();
         fd_ = ::mkostemp(name.data(), O_CLOEXEC);  // O_CREAT | O_EXCL, mode 0600: never an existing file or link
         if (fd_ < 0) fail("cannot create a temporary file in " + dir.string(), errno);
         tmp_ = name;
