@@ -212,7 +212,7 @@ const bool registered = register_command(Command{
                 std::cout << "  session " << id << "  " << started_utc << (s.cycles ? "  cycles " + std::to_string(*s.cycles) : "") << "  true FDJ " << num(fdj_nm, 5) << " FSJ " << num(fsj_nm, 5)
                           << "  physics:dyn FDJ " << physics_fdj << "  " << s.verdict << '\n';
             }
-            std::cout << "stored " << o->sessions << " test sessions of " << o->tail << " in " << o->db << '\n';
+            std::cout << "stored " << o->sessions << " test sessions of " << o->tail << " in " << io::escape_text(o->db) << '\n';
             return 0;
         };
     }});

@@ -2,6 +2,7 @@
 #include "cli/command.hpp"
 #include "core/emadiag_error.hpp"
 #include "emadiag/io/output_path.hpp"
+#include "emadiag/io/text_field.hpp"
 #include "estimation/health_estimate.hpp"
 #include "estimation/nn_trainer.hpp"
 
@@ -107,7 +108,7 @@ const bool registered = register_command(Command{
                             rep.mse.test_per_output[k], rep.model.std_error_normalised[k]);
             }
             std::printf("95 %% interval coverage on the test runs: %.1f %%\n", 100.0 * rep.test_coverage95);
-            std::printf("wrote %s\n", o->out.c_str());
+            std::printf("wrote %s\n", io::escape_text(o->out).c_str());
             return 0;
         };
     }});
