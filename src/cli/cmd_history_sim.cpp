@@ -9,6 +9,7 @@
 // session. Runs have source "history-sim"; their meta_json carries the true parameters
 // (true_FDJ_Nm, true_FSJ_Nm, ...). Deterministic for a seed.
 #include "cli/command.hpp"
+#include "cli/db_source.hpp"
 #include "cli/record_options.hpp"
 #include "diagnosis/session_storage.hpp"
 
@@ -93,7 +94,7 @@ const bool registered = register_command(Command{
     "history-sim", "Simulated maintenance history of one aircraft (ground routine per session, drifting friction) for emadiag trend",
     [](CLI::App& sub) -> std::function<int()> {
         auto o = std::make_shared<HistorySimOptions>();
-        sub.add_option("--db", o->db, "Maintenance database (SQLite; created if missing; sessions are added)")->required();
+        sub.add_option("--db", o->db, "Maintenance database (SQLite; created if missing; sessions are added)")->required()->check(sqlite_path());
         sub.add_option("--tail", o->tail, "Aircraft tail number")->required();
         sub.add_option("--sessions", o->sessions, "Number of test sessions")->capture_default_str();
         sub.add_option("--days-between", o->days_between, "Days between sessions")->capture_default_str();

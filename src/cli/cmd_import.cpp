@@ -6,6 +6,7 @@
 // (in flight eta_O and eta_A are identifiable, so their trends come from here), the findings
 // against the limits and the verdict, in one transaction under the tail and position.
 #include "cli/command.hpp"
+#include "cli/db_source.hpp"
 #include "cli/record_options.hpp"
 #include "cli/run_file.hpp"
 
@@ -54,7 +55,7 @@ const bool registered = register_command(Command{
         auto o = std::make_shared<ImportOptions>();
         sub.add_option("run", o->file, "Run file: RUN.csv (run CSV) or RUN.log (candump)")->required()->check(CLI::ExistingFile);
         sub.add_option("--tail", o->tail, "Aircraft tail number")->required();
-        sub.add_option("--db", o->db, "Maintenance database (SQLite; created if missing)")->capture_default_str();
+        sub.add_option("--db", o->db, "Maintenance database (SQLite; created if missing)")->capture_default_str()->check(sqlite_path());
         sub.add_option("--utc", o->utc, "When the run was recorded (YYYY-MM-DDThh:mm:ssZ; default: the run's started_utc key)");
         sub.add_option("--phase", o->phase, "in-flight or load-rig")->capture_default_str()->check(CLI::IsMember({"in-flight", "load-rig"}));
         sub.add_option("--serial", o->serial, "Actuator serial (default: the EMA identification in the run)");

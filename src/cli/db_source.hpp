@@ -32,6 +32,18 @@ inline CLI::Validator sqlite_file_or_fleet_uri() {
         "FILE or postgresql://...");
 }
 
+/// A SQLite file that may not exist yet (import, history-sim, test-run, recover create it): a URI
+/// (postgresql://..., any scheme://) is refused without repeating it, and nothing is created.
+inline CLI::Validator sqlite_path() {
+    return CLI::Validator(
+        [](std::string& value) -> std::string {
+            if (io::has_uri_scheme(value))
+                return "this command works on a station's SQLite file only, not a URI (" + io::escape_text(io::redact_uri_passwords(value)) + ")";
+            return {};
+        },
+        "FILE");
+}
+
 /// An existing SQLite file, for the commands that work on the station's file only (verify, export,
 /// sync's station, discover): a URI (postgresql://..., any scheme://) is refused without repeating it
 /// (it may hold a password).

@@ -367,7 +367,8 @@ TEST_F(HostileOutput, SqliteOnlyCommandsRefuseAUriAndCreateNothing) {
     const std::string uri = "postgresql://alice:S3cretPW@localhost/fleet";
     for (const std::string& cmd : std::vector<std::string>{"import " + run + " --tail N100 --position LH-ELEV --utc 2026-01-01T00:00:00Z --db " + uri,
                                    "verify --tail N100 --db " + uri, "export --tail N100 --db " + uri, "sync --db " + uri + " --to postgresql://h/db",
-                                   "history-sim --tail N100 --sessions 1 --noise none --db " + uri,
+                                   "history-sim --tail N100 --sessions 1 --noise none --db " + uri, "recover --db " + uri,
+                                   "test-run --bus socketcan:vcan-none --tail N100 --db " + uri,
                                    "discover --tail N100 --db " + uri}) {
         const auto r = run_in(cmd, dir_.string());
         EXPECT_NE(r.exit_code, 0) << cmd;
