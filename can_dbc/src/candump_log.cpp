@@ -4,6 +4,13 @@
 #include "emadiag/can/can_error.hpp"
 #include "emadiag/io/output_path.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+
 #include <cctype>
 #include <cstdio>
 #include <istream>
@@ -209,19 +216,17 @@ std::vector<CandumpRecord> read_candump_file(const std::string& path) {
     return read_candump(in, path);
 }
 
-namespace {
-const std::string& checked_output(const std::string& path) {
-    if (const auto problem = io::output_path_problem(path, "candump log")) throw CanError(*problem);
-    return path;
-}
-}  // namespace
-
 CandumpWriter::CandumpWriter(const std::string& path, CandumpWriterBounds bounds)
-    : path_(path),
-      bounds_(bounds),
-      out_(checked_output(path), std::ios::trunc | std::ios::binary),
-      last_flush_(std::chrono::steady_clock::now()) {
-    if (!out_) throw CanError(path + ": cannot create the candump log");
+    : path_(path), bounds_(bounds), last_flush_(std::chrono::steady_clock::now()) {
+    io::check_output_path<CanError>(path, "candump log");
+    fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC, 0666);
+    if (fd_ < 0) throw CanError(path + ": cannot create the candump log: " + std::strerror(errno));
+    struct stat st {};
+    if (::fstat(fd_, &st) != 0 || !S_ISREG(st.st_mode)) {  // replaced by a device or FIFO since the check
+        ::close(fd_);
+        fd_ = -1;
+        throw CanError(path + ": the candump log is not a regular file; refusing to write it");
+    }
     buffer_.reserve(bounds_.max_buffered_bytes + 128);
 }
 
@@ -231,6 +236,7 @@ CandumpWriter::~CandumpWriter() {
         flush();
     } catch (...) {
     }
+    if (fd_ >= 0) ::close(fd_);
 }
 
 void CandumpWriter::write(const CanFrame& frame, const std::string& iface) {
@@ -247,12 +253,18 @@ void CandumpWriter::write(const CanFrame& frame, const std::string& iface) {
 
 void CandumpWriter::flush() {
     last_flush_ = std::chrono::steady_clock::now();
-    if (!buffer_.empty()) {
-        out_.write(buffer_.data(), static_cast<std::streamsize>(buffer_.size()));
-        buffer_.clear();
+    std::size_t done = 0;
+    while (done < buffer_.size()) {
+        const ssize_t n = ::write(fd_, buffer_.data() + done, buffer_.size() - done);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) {
+            const int e = n < 0 ? errno : EIO;
+            buffer_.erase(0, done);
+            throw CanError(path_ + ": write failed: " + std::strerror(e) + " (" + std::to_string(lines_) + " lines logged so far)");
+        }
+        done += static_cast<std::size_t>(n);
     }
-    out_.flush();
-    if (!out_) throw CanError(path_ + ": write failed (" + std::to_string(lines_) + " lines logged so far)");
+    buffer_.clear();
 }
 
 }  // namespace emadiag::can

@@ -4,6 +4,7 @@
 #include "record_detail.hpp"
 
 #include "emadiag/io/output_path.hpp"
+#include "emadiag/io/uri.hpp"
 #include "schema_sql.hpp"
 
 #include <sqlite3.h>
@@ -68,6 +69,13 @@ void throw_sqlite_error(Database& db, int rc, const std::string& what) {
 Database::Database(const std::string& path, int busy_timeout_ms, bool quick_check) : path_(path), busy_timeout_ms_(busy_timeout_ms) {
     const bool in_memory = path == ":memory:" || path.empty();
     if (!in_memory) {
+        // A URI (postgresql://..., any scheme://) is no file name: refused before anything is created,
+        // and never repeated with its password.
+        if (io::has_uri_scheme(path))
+            throw DbError("database " + io::redact_uri_passwords(path) +
+                              " is a URI: this command works on a station's SQLite file only (give its path; the fleet server is read by "
+                              "report, trend and fleet, and written by sync --to)",
+                          DbErrorKind::Invalid);
         if (const auto problem = io::output_path_problem(path, "maintenance database")) throw DbError(*problem);
         // The header first: a file that is not SQLite's is refused before SQLite touches it.
         std::ifstream in(path, std::ios::binary);

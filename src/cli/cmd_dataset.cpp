@@ -2,6 +2,7 @@
 #include "cli/command.hpp"
 #include "core/emadiag_error.hpp"
 #include "emadiag/io/output_path.hpp"
+#include "emadiag/io/text_field.hpp"
 #include "estimation/dataset.hpp"
 
 #include <unistd.h>
@@ -69,7 +70,7 @@ const bool registered = register_command(Command{
                       << ", rejected non-finite " << d.filter.non_finite << ", limit cycle " << d.filter.limit_cycle
                       << ", non-physical " << d.filter.non_physical << '\n'
                       << "wrote " << d.runs.size() << " runs of " << (d.runs.empty() ? 0 : d.runs.front().samples.size())
-                      << " samples to " << o->out << '\n';
+                      << " samples to " << io::escape_text(o->out) << '\n';
             return 0;
         };
     }});

@@ -5,6 +5,7 @@
 // and after (docs/discovery.md). --out-model writes the augmented model JSON (apply_model reads
 // it); --out-params writes its sim::EmaParams JSON, which `emadiag simulate --params` reads.
 #include "cli/command.hpp"
+#include "cli/db_source.hpp"
 #include "core/emadiag_error.hpp"
 #include "core/run_csv.hpp"
 #include "discovery/candidate_effect.hpp"
@@ -18,6 +19,7 @@
 #include "emadiag/db/test_session_store.hpp"
 #include "emadiag/sim/simulator.hpp"
 #include "emadiag/io/output_path.hpp"
+#include "emadiag/io/text_field.hpp"
 #include "emadiag/io/utc_now.hpp"
 
 #include <nlohmann/json.hpp>
@@ -214,6 +216,13 @@ Run run_from_stored(const db::StoredRun& s) {
     return r;
 }
 
+/// The files discover reads: the run CSVs and the database (none of them may be an output).
+io::OutputInputs discover_inputs(const std::vector<std::string>& paths, const std::string& db_path) {
+    io::OutputInputs inputs(paths);
+    if (!db_path.empty()) inputs.databases.push_back(db_path);
+    return inputs;
+}
+
 /// The stored runs of ONE actuator (docs/discovery.md, "Findings in the maintenance record"): the
 /// valid runs of the tail's sessions at `position`, of `serial` when given; without it the position
 /// must have held one serial only. Sets `serial` to the actuator's. Throws naming what is missing or
@@ -271,19 +280,12 @@ void check_run_of_actuator(const Run& run, const std::string& path, const std::s
     }
 }
 
-void write_text_file(const std::string& path, const std::string& text) {
-    std::ofstream out(path);
-    if (!out) throw EmadiagError("cannot write " + path);
-    out << text;
-    if (!out) throw EmadiagError("error writing " + path);
+void write_text_file(const std::string& path, const std::string& text, const io::OutputInputs& inputs) {
+    io::write_output_file<EmadiagError>(path, "SVG plot", inputs, text);
 }
 
-void write_json_file(const std::string& path, const nlohmann::json& j) {
-    if (const auto problem = io::output_path_problem(path, "JSON output")) throw EmadiagError(*problem);
-    std::ofstream out(path);
-    if (!out) throw EmadiagError("cannot write " + path);
-    out << j.dump(2) << '\n';
-    if (!out) throw EmadiagError("error writing " + path);
+void write_json_file(const std::string& path, const nlohmann::json& j, const io::OutputInputs& inputs) {
+    io::write_output_file<EmadiagError>(path, "JSON output", inputs, j.dump(2) + "\n");
 }
 
 const bool registered = register_command(Command{
@@ -298,7 +300,7 @@ const bool registered = register_command(Command{
         auto json = std::make_shared<bool>(false);
         auto max_effects = std::make_shared<int>(discovery::kMaxEffects);
         sub.add_option("runs", *paths, "Run CSV file(s); several runs are also screened together");
-        sub.add_option("--db", *db_path, "Maintenance database (with --tail)")->check(CLI::ExistingFile);
+        sub.add_option("--db", *db_path, "Maintenance database (with --tail)")->check(sqlite_file());
         sub.add_option("--tail", *tail, "Take the tail's stored runs from the database (oldest first)");
         auto position = std::make_shared<std::string>();
         auto serial = std::make_shared<std::string>();
@@ -311,6 +313,10 @@ const bool registered = register_command(Command{
         sub.add_option("--plot", *plot, "Write an SVG of the residual against the variable it depends on most");
         sub.add_option("--max-effects", *max_effects, "Most effects to add")->check(CLI::Range(0, discovery::kMaxEffects));
         return [=] {
+            // Checked before the discovery (seconds to minutes): an output is no input, no database, no
+            // device, FIFO or link, and the three outputs are three files.
+            const io::OutputInputs inputs = discover_inputs(*paths, *db_path);
+            io::check_output_paths<EmadiagError>({{*out_model, "--out-model"}, {*out_params, "--out-params"}, {*plot, "--plot"}}, inputs);
             std::vector<Run> runs;
             std::vector<std::string> labels;
             if (!tail->empty()) {
@@ -330,7 +336,7 @@ const bool registered = register_command(Command{
             }
             for (const auto& p : *paths) {
                 runs.push_back(read_run_csv_file(p));
-                labels.push_back(p);
+                labels.push_back(io::escape_text(p));  // a file name shown in the report: printable
                 if (!tail->empty()) check_run_of_actuator(runs.back(), p, *tail, *position, *serial);
             }
             if (runs.empty()) throw EmadiagError("discover: give run CSV file(s), or --db FILE --tail T");
@@ -357,9 +363,9 @@ const bool registered = register_command(Command{
                 const sim::SimCounters sims1 = sim::sim_counters();
                 const auto t1 = std::chrono::steady_clock::now();
                 store_finding(discovery::finding_record(r));
-                if (!out_model->empty()) write_json_file(*out_model, r.model.to_json());
-                if (!out_params->empty()) write_json_file(*out_params, r.model.params.to_json());
-                if (!plot->empty()) write_text_file(*plot, plot_of(r, labels.front()));
+                if (!out_model->empty()) write_json_file(*out_model, r.model.to_json(), inputs);
+                if (!out_params->empty()) write_json_file(*out_params, r.model.params.to_json(), inputs);
+                if (!plot->empty()) write_text_file(*plot, plot_of(r, labels.front()), inputs);
                 if (*json) std::cout << r.to_json().dump(2) << '\n';
                 else print_text(std::cout, labels.front(), r);
                 if (*json) return 0;  // the JSON report stays one document
@@ -380,9 +386,9 @@ const bool registered = register_command(Command{
             const discovery::AcrossRunsReport all = discovery::discover_runs(runs, labels, opt);
             const discovery::FindingRecord record = discovery::finding_record(all);
             store_finding(record);
-            if (!out_model->empty()) write_json_file(*out_model, record.model);
+            if (!out_model->empty()) write_json_file(*out_model, record.model, inputs);
             if (!out_params->empty()) {
-                write_json_file(*out_params, all.reports.front().model.params.to_json());
+                write_json_file(*out_params, all.reports.front().model.params.to_json(), inputs);
             }
             if (!plot->empty()) {
                 std::size_t pick = 0;
@@ -392,7 +398,7 @@ const bool registered = register_command(Command{
                         break;
                     }
                 }
-                write_text_file(*plot, plot_of(all.reports[pick], all.labels[pick]));
+                write_text_file(*plot, plot_of(all.reports[pick], all.labels[pick]), inputs);
             }
             if (*json) {
                 std::cout << all.to_json().dump(2) << '\n';

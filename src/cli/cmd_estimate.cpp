@@ -5,6 +5,7 @@
 // its effects and terms are removed from the run first (discovery/model_correction.hpp), the
 // estimators then fit the datasheet law to what is left, and the file with its SHA-256 is listed.
 #include "cli/command.hpp"
+#include "emadiag/io/text_field.hpp"
 #include "cli/run_file.hpp"
 #include "core/emadiag_error.hpp"
 #include "core/run_csv.hpp"
@@ -58,11 +59,11 @@ std::string fmt(double v, int digits) {
 
 /// The loud warning for a run that may give no verdict, printed before and after the estimates.
 std::string invalid_warning(const RunValidity& v) {
-    return "WARNING: RUN NOT VALID: " + v.reason + ". The estimates are for information only; no verdict is possible from this run.";
+    return "WARNING: RUN NOT VALID: " + io::escape_text(v.reason) + ". The estimates are for information only; no verdict is possible from this run.";
 }
 
 void print_text(std::ostream& os, const std::string& path, const Run& run, const RunValidity& validity, const RunEstimates& out) {
-    os << "run " << path << ": case " << run.load_case << ", sequence " << run.sequence << ", "
+    os << "run " << io::escape_text(path) << ": case " << io::escape_text(run.load_case) << ", sequence " << io::escape_text(run.sequence) << ", "
        << run.samples.size() << " samples\n";
     if (!validity.valid) os << invalid_warning(validity) << '\n';
     for (const auto& h : out.estimates) {
@@ -87,8 +88,8 @@ void print_text(std::ostream& os, const std::string& path, const Run& run, const
             os << '\n';
         }
     }
-    for (const auto& f : out.model_files) os << "model: " << f << '\n';
-    for (const auto& n : out.notes) os << "note: " << n << '\n';
+    for (const auto& f : out.model_files) os << "model: " << io::escape_text(f) << '\n';
+    for (const auto& n : out.notes) os << "note: " << io::escape_text(n) << '\n';
     // Agreement between the methods, parameter by parameter.
     if (out.estimates.size() == 2) {
         os << "\nagreement (|difference| / combined se):\n";

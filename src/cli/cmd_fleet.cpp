@@ -64,9 +64,10 @@ std::string text_fleet(const std::vector<pg::FleetRow>& rows, const pg::FleetOpt
        << "serial" << std::setw(10) << "sessions" << std::setw(14) << "last verdict" << std::setw(11) << "lower (d)" << std::setw(31)
        << "status" << "driven by\n";
     for (const auto& r : rows) {
-        os << std::left << std::setw(6) << r.rank << std::setw(10) << r.tail_number << std::setw(10) << r.position << std::setw(8) << r.ata_reference
-           << std::setw(20) << r.actuator_serial << std::setw(10) << r.sessions << std::setw(14) << r.last_verdict << std::setw(11)
-           << whole(r.urgency_days) << std::setw(31) << r.status << driver_text(r) << '\n';
+        os << std::left << std::setw(6) << r.rank << std::setw(10) << escape_text(r.tail_number) << std::setw(10) << escape_text(r.position)
+           << std::setw(8) << escape_text(r.ata_reference) << std::setw(20) << escape_text(r.actuator_serial) << std::setw(10) << r.sessions
+           << std::setw(14) << escape_text(r.last_verdict) << std::setw(11) << whole(r.urgency_days) << std::setw(31) << escape_text(r.status)
+           << escape_text(driver_text(r)) << '\n';
     }
     return os.str();
 }
@@ -83,10 +84,10 @@ std::string csv_fleet(const std::vector<pg::FleetRow>& rows) {
     };
     for (const auto& r : rows) {
         const auto* p = driver(r);
-        os << r.rank << ',' << csv_field(r.tail_number) << ',' << csv_field(r.position) << ',' << r.ata_reference << ','
-           << csv_field(r.actuator_serial) << ',' << r.sessions << ',' << r.last_utc << ',' << r.last_verdict << ','
+        os << r.rank << ',' << csv_field(r.tail_number) << ',' << csv_field(r.position) << ',' << csv_field(r.ata_reference) << ','
+           << csv_field(r.actuator_serial) << ',' << r.sessions << ',' << csv_field(r.last_utc) << ',' << csv_field(r.last_verdict) << ','
            << (r.last_cycles ? std::to_string(*r.last_cycles) : "") << ',' << csv_field(r.status) << ',' << opt(r.urgency_days) << ','
-           << r.driving_parameter << ',' << (p ? p->axis : "") << ',' << (p ? opt(p->latest) : "") << ',' << (p ? opt(p->rul.rul_days) : "")
+           << csv_field(r.driving_parameter) << ',' << (p ? csv_field(p->axis) : "") << ',' << (p ? opt(p->latest) : "") << ',' << (p ? opt(p->rul.rul_days) : "")
            << ',' << (p ? opt(p->rul.rul_lower_days) : "") << ',' << (p ? opt(p->rul.rul_upper_days) : "") << '\n';
     }
     return os.str();
@@ -108,9 +109,11 @@ const bool registered = register_command(Command{
         return [o] {
             db::OpenedSource database = db::open_record_source(o->db);
             const auto rows = pg::build_fleet_view(*database.source, o->fleet);
-            write_output(o->out, o->format == "json"  ? pg::to_json(rows, o->fleet).dump(2) + "\n"
-                                 : o->format == "csv" ? csv_fleet(rows)
-                                                      : text_fleet(rows, o->fleet));
+            write_output(o->out,
+                         o->format == "json"  ? pg::to_json(rows, o->fleet).dump(2) + "\n"
+                         : o->format == "csv" ? csv_fleet(rows)
+                                              : text_fleet(rows, o->fleet),
+                         database_input(o->db));
             return 0;
         };
     }});

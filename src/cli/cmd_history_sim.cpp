@@ -9,6 +9,7 @@
 // session. Runs have source "history-sim"; their meta_json carries the true parameters
 // (true_FDJ_Nm, true_FSJ_Nm, ...). Deterministic for a seed.
 #include "cli/command.hpp"
+#include "cli/db_source.hpp"
 #include "cli/record_options.hpp"
 #include "diagnosis/session_storage.hpp"
 
@@ -20,6 +21,7 @@
 #include "diagnosis/verdict.hpp"
 #include "emadiag/db/run_store.hpp"
 #include "emadiag/db/test_session_store.hpp"
+#include "emadiag/io/text_field.hpp"
 #include "emadiag/sim/simulator.hpp"
 #include "estimation/health_estimate.hpp"
 #include "estimation/run_estimator.hpp"
@@ -92,7 +94,7 @@ const bool registered = register_command(Command{
     "history-sim", "Simulated maintenance history of one aircraft (ground routine per session, drifting friction) for emadiag trend",
     [](CLI::App& sub) -> std::function<int()> {
         auto o = std::make_shared<HistorySimOptions>();
-        sub.add_option("--db", o->db, "Maintenance database (SQLite; created if missing; sessions are added)")->required();
+        sub.add_option("--db", o->db, "Maintenance database (SQLite; created if missing; sessions are added)")->required()->check(sqlite_path());
         sub.add_option("--tail", o->tail, "Aircraft tail number")->required();
         sub.add_option("--sessions", o->sessions, "Number of test sessions")->capture_default_str();
         sub.add_option("--days-between", o->days_between, "Days between sessions")->capture_default_str();
@@ -121,6 +123,7 @@ const bool registered = register_command(Command{
             set_record_info(checked, o->record);  // an unknown position is an error before anything is simulated
             const std::string serial =
                 !o->serial.empty() ? o->serial : "SIM-" + o->tail + (o->record.position.empty() ? "" : "-" + o->record.position);
+            io::check_text_field<EmadiagError>("--serial", serial);
             const std::int64_t first_cycles = o->record.cycles.value_or(0);
             const double start_days = pg::parse_utc_days_or_throw(o->start_utc, "--start-utc");
             const sim::LoadCase load_case = sim::parse_load_case(o->load_case);
@@ -210,7 +213,7 @@ const bool registered = register_command(Command{
                 std::cout << "  session " << id << "  " << started_utc << (s.cycles ? "  cycles " + std::to_string(*s.cycles) : "") << "  true FDJ " << num(fdj_nm, 5) << " FSJ " << num(fsj_nm, 5)
                           << "  physics:dyn FDJ " << physics_fdj << "  " << s.verdict << '\n';
             }
-            std::cout << "stored " << o->sessions << " test sessions of " << o->tail << " in " << o->db << '\n';
+            std::cout << "stored " << o->sessions << " test sessions of " << o->tail << " in " << io::escape_text(o->db) << '\n';
             return 0;
         };
     }});

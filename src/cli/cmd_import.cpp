@@ -6,6 +6,7 @@
 // (in flight eta_O and eta_A are identifiable, so their trends come from here), the findings
 // against the limits and the verdict, in one transaction under the tail and position.
 #include "cli/command.hpp"
+#include "cli/db_source.hpp"
 #include "cli/record_options.hpp"
 #include "cli/run_file.hpp"
 
@@ -15,6 +16,7 @@
 #include "diagnosis/session_storage.hpp"
 #include "diagnosis/verdict.hpp"
 #include "emadiag/db/test_session_store.hpp"
+#include "emadiag/io/text_field.hpp"
 #include "estimation/run_estimator.hpp"
 #include "prognostics/utc_time.hpp"
 
@@ -53,7 +55,7 @@ const bool registered = register_command(Command{
         auto o = std::make_shared<ImportOptions>();
         sub.add_option("run", o->file, "Run file: RUN.csv (run CSV) or RUN.log (candump)")->required()->check(CLI::ExistingFile);
         sub.add_option("--tail", o->tail, "Aircraft tail number")->required();
-        sub.add_option("--db", o->db, "Maintenance database (SQLite; created if missing)")->capture_default_str();
+        sub.add_option("--db", o->db, "Maintenance database (SQLite; created if missing)")->capture_default_str()->check(sqlite_path());
         sub.add_option("--utc", o->utc, "When the run was recorded (YYYY-MM-DDThh:mm:ssZ; default: the run's started_utc key)");
         sub.add_option("--phase", o->phase, "in-flight or load-rig")->capture_default_str()->check(CLI::IsMember({"in-flight", "load-rig"}));
         sub.add_option("--serial", o->serial, "Actuator serial (default: the EMA identification in the run)");
@@ -74,6 +76,7 @@ const bool registered = register_command(Command{
             if (utc.empty()) throw EmadiagError(o->file + ": the run has no started_utc key; give --utc YYYY-MM-DDThh:mm:ssZ");
             (void)prognostics::parse_utc_days_or_throw(utc, "--utc");
             const std::string serial = !o->serial.empty() ? o->serial : run.meta_value("ema_serial_number").value_or("");
+            io::check_text_field<EmadiagError>(!o->serial.empty() ? "--serial" : o->file + ": run metadata ema_serial_number", serial);
 
             // Only a complete, valid run gives a verdict (core/run_validity.hpp); any other is stored
             // with its samples and raw log, valid=false and the reason, and gives NO_TEST.
@@ -118,9 +121,9 @@ const bool registered = register_command(Command{
 
             db::Database database(o->db);
             const db::SessionReceipt receipt = db::store_session(database, s);
-            std::cout << "emadiag import: " << o->file << " (case " << run.load_case << ", " << run.sequence << ", " << run.samples.size()
-                      << " samples) -> tail " << o->tail << ", position " << *s.position << ", serial " << (serial.empty() ? "?" : serial)
-                      << ", " << o->phase << ", " << utc << '\n';
+            std::cout << "emadiag import: " << io::escape_text(o->file) << " (case " << io::escape_text(run.load_case) << ", "
+                      << io::escape_text(run.sequence) << ", " << run.samples.size() << " samples) -> tail " << o->tail << ", position "
+                      << *s.position << ", serial " << (serial.empty() ? "?" : serial) << ", " << o->phase << ", " << io::escape_text(utc) << '\n';
             for (const auto& f : verdict.findings) {
                 std::ostringstream line;
                 line.precision(5);
@@ -134,10 +137,10 @@ const bool registered = register_command(Command{
                 line << "  " << to_string(f.status);
                 std::cout << line.str() << '\n';
             }
-            if (!a.valid) std::cout << "RUN NOT VALID: " << a.invalid_reason << "; stored with valid=false, no verdict is possible\n";
-            std::cout << "verdict " << to_string(verdict.verdict) << " -- " << verdict.reason << '\n';
+            if (!a.valid) std::cout << "RUN NOT VALID: " << io::escape_text(a.invalid_reason) << "; stored with valid=false, no verdict is possible\n";
+            std::cout << "verdict " << to_string(verdict.verdict) << " -- " << io::escape_text(verdict.reason) << '\n';
             if (receipt.installation) std::cout << "INSTALLATION CHANGE: " << describe_installation(*receipt.installation) << '\n';
-            std::cout << "stored as session " << receipt.session_id << " in " << o->db << " (chain " << receipt.content_sha256.substr(0, 16)
+            std::cout << "stored as session " << receipt.session_id << " in " << io::escape_text(o->db) << " (chain " << receipt.content_sha256.substr(0, 16)
                       << ")\n";
             return 0;
         };

@@ -5,7 +5,6 @@
 #include "estimation/paper_tables.hpp"
 
 #include <algorithm>
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <thread>
@@ -30,17 +29,14 @@ const bool registered = register_command(Command{
         sub.add_flag("--no-physics", o->no_physics, "Skip the physics estimator");
         return [o] {
             // Checked before the tables are computed (minutes), not when they are written.
-            if (const auto problem = io::output_path_problem(o->out, "paper tables")) throw EmadiagError(*problem);
+            io::check_output_path<EmadiagError>(o->out, "paper tables");
             PaperTablesOptions p;
             p.quick = o->quick;
             p.seed = o->seed;
             p.physics = !o->no_physics;
             p.threads = std::max(1u, std::thread::hardware_concurrency());
             const std::string md = paper_tables_markdown(p, [](const std::string& line) { std::cerr << line << '\n'; });
-            std::ofstream out(o->out);
-            if (!out) throw EmadiagError("cannot open " + o->out + " for writing");
-            out << md;
-            if (!out) throw EmadiagError("write error on " + o->out);
+            io::write_output_file<EmadiagError>(o->out, "paper tables", {}, md);
             std::cout << md;
             return 0;
         };

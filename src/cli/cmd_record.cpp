@@ -7,6 +7,7 @@
 #include "core/emadiag_error.hpp"
 #include "core/run_csv.hpp"
 #include "emadiag/can/can_bus.hpp"
+#include "emadiag/io/output_path.hpp"
 
 #include <atomic>
 #include <iostream>
@@ -38,6 +39,8 @@ const bool registered = register_command(Command{
         sub.add_option("--answer-timeout-ms", o->answer_timeout_ms, "Time the EMA has to answer a command")->capture_default_str();
         sub.add_flag("--no-heartbeat", o->no_heartbeat, "Test only: send no TOOL_Heartbeat (the EMA must abort)");
         return [o] {
+            // Both outputs checked before the bus is touched (emadiag/io/output_path.hpp).
+            io::check_output_paths<EmadiagError>({{o->out + ".log", "candump log"}, {o->out + ".csv", "run CSV"}});
             const std::atomic<bool>& interrupt = install_interrupt_handler();
             auto bus = can::open_bus(o->bus);
             can_tool::RecorderOptions ro;
@@ -49,7 +52,7 @@ const bool registered = register_command(Command{
             can_tool::Recorder recorder(*bus, ro);
             const can_tool::RecordOutcome r = recorder.record(interrupt);
             const std::string csv = o->out + ".csv";
-            write_run_csv_file(csv, r.run);
+            write_run_csv_file(csv, r.run, io::OutputInputs({ro.log_path}));
             const auto& s = r.stats;
             std::cout << "record: " << o->sequence << " on " << o->bus << ", session " << o->session_id << ": " << r.status << '\n'
                       << "  telemetry: " << s.samples_complete << " of " << s.samples_expected << " samples complete; "

@@ -2,6 +2,7 @@
 // that were never stored (the tool was killed mid-run, the database was locked or the disk full).
 // The next `emadiag test-run` on the same database does the same before it starts.
 #include "cli/command.hpp"
+#include "cli/db_source.hpp"
 
 #include "diagnosis/session_spool.hpp"
 
@@ -15,7 +16,7 @@ const bool registered = register_command(Command{
     "recover", "Store the test sessions left in the spool beside the database (killed run, locked database, full disk)",
     [](CLI::App& sub) -> std::function<int()> {
         auto db = std::make_shared<std::string>("maintenance.db");
-        sub.add_option("--db", *db, "Maintenance database (SQLite); its spool is DB.spool/")->capture_default_str();
+        sub.add_option("--db", *db, "Maintenance database (SQLite); its spool is DB.spool/")->capture_default_str()->check(sqlite_path());
         return [db] {
             const auto dir = spool_dir_for(*db);
             const auto recovered = recover_spooled_sessions(*db, [](const std::string& line) { std::cout << line << '\n' << std::flush; });
@@ -24,8 +25,8 @@ const bool registered = register_command(Command{
                 stored += r.db_session_id > 0 ? 1 : 0;
                 empty += r.nothing_recorded ? 1 : 0;
             }
-            std::cout << "recover: " << stored << " spooled session(s) stored in " << *db << ", " << recovered.size() - stored - empty
-                      << " found already stored, " << empty << " with nothing recorded; spool " << dir.string() << '\n';
+            std::cout << "recover: " << stored << " spooled session(s) stored in " << io::escape_text(*db) << ", " << recovered.size() - stored - empty
+                      << " found already stored, " << empty << " with nothing recorded; spool " << io::escape_text(dir.string()) << '\n';
             return 0;
         };
     }});

@@ -65,16 +65,16 @@ std::string rul_text(const pg::AxisTrend& a) {
 
 void print_view(std::ostream& os, const pg::HistoryView& v) {
     if (v.kind == "position") {
-        os << "\nPOSITION " << v.key;
-        if (!v.ata_reference.empty()) os << " (ATA " << v.ata_reference << (v.description.empty() ? "" : ", " + v.description) << ")";
-        os << ": serial installed " << (v.current_serial.empty() ? "?" : v.current_serial);
+        os << "\nPOSITION " << escape_text(v.key);
+        if (!v.ata_reference.empty()) os << " (ATA " << escape_text(v.ata_reference) << (v.description.empty() ? "" : ", " + escape_text(v.description)) << ")";
+        os << ": serial installed " << (v.current_serial.empty() ? "?" : escape_text(v.current_serial));
     } else {
-        os << "\nSERIAL " << v.key << ": last seen at " << v.current_place;
+        os << "\nSERIAL " << escape_text(v.key) << ": last seen at " << escape_text(v.current_place);
     }
-    os << ", " << v.sessions.size() << " sessions, last verdict " << v.last_verdict << '\n';
+    os << ", " << v.sessions.size() << " sessions, last verdict " << escape_text(v.last_verdict) << '\n';
     for (const auto& i : v.installations)
-        os << "  installed " << i.detected_utc << "  " << i.tail_number << ' ' << i.position << ": "
-           << (i.from_serial.empty() ? "(none recorded)" : i.from_serial) << " -> " << i.to_serial
+        os << "  installed " << escape_text(i.detected_utc) << "  " << escape_text(i.tail_number) << ' ' << escape_text(i.position) << ": "
+           << (i.from_serial.empty() ? "(none recorded)" : escape_text(i.from_serial)) << " -> " << escape_text(i.to_serial)
            << (i.cycles ? " at " + std::to_string(*i.cycles) + " cycles" : "") << '\n';
     os << "  " << std::left << std::setw(8) << "param" << std::setw(8) << "axis" << std::setw(8) << "points" << std::setw(30) << "latest [95 %]"
        << std::setw(22) << "trend per 100 (se)" << std::setw(12) << "model" << std::setw(12) << "crossing" << "RUL [90 %]\n";
@@ -98,18 +98,20 @@ void print_view(std::ostream& os, const pg::HistoryView& v) {
     }
     os << "  history:\n";
     for (const auto& s : v.sessions) {
-        os << "    " << std::right << std::setw(6) << s.session_id << "  " << std::left << std::setw(21) << s.started_utc << std::setw(8)
-           << s.tail_number << ' ' << std::setw(8) << s.position.value_or("-") << ' ' << std::setw(20) << s.actuator_serial << ' ' << std::setw(12)
-           << s.phase << std::setw(8) << (s.cycles ? std::to_string(*s.cycles) : "-") << std::setw(14) << s.verdict
-           << (s.technician_name.empty() ? "" : s.technician_name + (s.technician_certificate.empty() ? "" : " (" + s.technician_certificate + ")"))
-           << (s.tool_version.empty() ? "" : "  [emadiag " + s.tool_version + "]") << '\n';
+        os << "    " << std::right << std::setw(6) << s.session_id << "  " << std::left << std::setw(21) << escape_text(s.started_utc) << std::setw(8)
+           << escape_text(s.tail_number) << ' ' << std::setw(8) << escape_text(s.position.value_or("-")) << ' ' << std::setw(20) << escape_text(s.actuator_serial)
+           << ' ' << std::setw(12) << escape_text(s.phase) << std::setw(8) << (s.cycles ? std::to_string(*s.cycles) : "-") << std::setw(14) << escape_text(s.verdict)
+           << (s.technician_name.empty() ? ""
+                                         : escape_text(s.technician_name) +
+                                               (s.technician_certificate.empty() ? "" : " (" + escape_text(s.technician_certificate) + ")"))
+           << (s.tool_version.empty() ? "" : "  [emadiag " + escape_text(s.tool_version) + "]") << '\n';
     }
-    for (const auto& n : v.notes) os << "  note: " << n << '\n';
+    for (const auto& n : v.notes) os << "  note: " << escape_text(n) << '\n';
 }
 
 std::string text_report(const pg::FleetRecord& r) {
     std::ostringstream os;
-    os << "emadiag report: tail " << r.tail_number << " (" << r.database << "), " << r.sessions_total << " sessions, phase " << r.options.phase
+    os << "emadiag report: tail " << escape_text(r.tail_number) << " (" << escape_text(io::redact_uri_passwords(r.database)) << "), " << r.sessions_total << " sessions, phase " << r.options.phase
        << "; chain head " << r.chain_head_sha256.substr(0, 16) << "...\n"
        << "trends per position (the serial installed now) and per serial (all tails); axis * = preferred (cycles when every session has "
           "them); RUL 90 % intervals from "
@@ -123,7 +125,8 @@ std::string text_report(const pg::FleetRecord& r) {
     for (const auto& v : r.serials) print_view(os, v);
     os << "\nopen discovery findings: " << (r.open_findings.empty() ? "none" : std::to_string(r.open_findings.size())) << '\n';
     for (const auto& f : r.open_findings)
-        os << "  #" << f.finding_id << "  " << f.found_utc << "  " << f.position.value_or("-") << ' ' << f.actuator_serial << ": " << f.summary << '\n';
+        os << "  #" << f.finding_id << "  " << escape_text(f.found_utc) << "  " << escape_text(f.position.value_or("-")) << ' '
+           << escape_text(f.actuator_serial) << ": " << escape_text(f.summary) << '\n';
     return os.str();
 }
 
@@ -189,9 +192,9 @@ const bool registered = register_command(Command{
             } else {
                 text = text_report(record);
             }
-            write_output(o->out, text);
+            write_output(o->out, text, database_input(o->db));
             if (!o->out.empty())
-                std::cerr << "wrote the " << o->format << " report of " << o->tail << " to " << o->out << " (" << text.size() << " bytes)\n";
+                std::cerr << "wrote the " << o->format << " report of " << o->tail << " to " << escape_text(o->out) << " (" << text.size() << " bytes)\n";
             return 0;
         };
     }});

@@ -4,6 +4,8 @@
 #include "core/run_csv.hpp"
 #include "core/run_summary.hpp"
 #include "core/sim_run.hpp"
+#include "emadiag/io/output_path.hpp"
+#include "emadiag/io/text_field.hpp"
 #include "emadiag/sim/sim_error.hpp"
 #include "emadiag/sim/simulator.hpp"
 
@@ -25,11 +27,11 @@ const bool registered = register_command(Command{
             const sim::SimResult result = sim::simulate(config);
             if (!result.finite) throw sim::SimError("the simulation diverged (NaN or inf in the samples)");
             const Run run = make_run(config, result);
-            if (!out->empty()) write_run_csv_file(*out, run);
+            if (!out->empty()) write_run_csv_file(*out, run, io::OutputInputs({o->params_file}));
             std::cout << "EMA-REF-1 simulation: case " << run.load_case << ", sequence " << run.sequence << ", noise "
                       << o->noise << ", seed " << o->seed << '\n';
             std::cout << format_summary(summarise(run));
-            if (!out->empty()) std::cout << "wrote " << run.samples.size() << " samples to " << *out << '\n';
+            if (!out->empty()) std::cout << "wrote " << run.samples.size() << " samples to " << io::escape_text(*out) << '\n';
             return 0;
         };
     }});

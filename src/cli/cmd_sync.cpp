@@ -43,7 +43,7 @@ const bool registered_sync = register_command(Command{
     "sync", "Push the station's sessions (runs, raw logs, estimates, findings, installations, discoveries) to the fleet server (PostgreSQL)",
     [](CLI::App& sub) -> std::function<int()> {
         auto o = std::make_shared<SyncCliOptions>();
-        sub.add_option("--db", o->db, "The station's maintenance database (SQLite)")->capture_default_str()->check(CLI::ExistingFile);
+        sub.add_option("--db", o->db, "The station's maintenance database (SQLite)")->capture_default_str()->check(sqlite_file());
         sub.add_option("--to", o->to, "Fleet server: postgresql://HOST[:PORT]/DATABASE?user=ROLE (no password in it)")
             ->required()
             ->check(fleet_uri());
@@ -57,7 +57,7 @@ const bool registered_sync = register_command(Command{
             const db::SyncResult r = db::sync_to_fleet(station, o->to, so);
             std::ostringstream rate;
             rate << std::fixed << std::setprecision(0) << (r.seconds > 0 ? static_cast<double>(r.sessions_pushed) / r.seconds : 0.0);
-            std::cout << "sync: station " << r.station_uuid << " (" << o->db << ") -> " << o->to << ": " << r.sessions_pushed
+            std::cout << "sync: station " << r.station_uuid << " (" << io::escape_text(o->db) << ") -> " << io::escape_text(io::redact_uri_passwords(o->to)) << ": " << r.sessions_pushed
                       << " session(s) pushed in " << r.batches << " transaction(s) (" << r.runs << " runs, " << r.samples << " samples, "
                       << r.raw_log_bytes << " raw-log bytes), " << r.sessions_recovered
                       << " already on the server from an earlier sync and now recorded, " << r.discovery_findings

@@ -2,6 +2,7 @@
 // [--model AUGMENTED.json]: the technician's one command on the ramp (diagnosis/test_run.hpp). It prints progress, the
 // findings against the limits and the verdict; the exit code is the verdict.
 #include "cli/command.hpp"
+#include "cli/db_source.hpp"
 #include "cli/interrupt.hpp"
 #include "cli/record_options.hpp"
 
@@ -73,7 +74,7 @@ const bool registered = register_command(Command{
         sub.add_option("--phase", o->phase, "pre-flight or post-flight")->capture_default_str()->check(CLI::IsMember({kPhasePreFlight, kPhasePostFlight}));
         sub.add_option("--sequences", o->sequences, "Test sequences in order (dyn: the paper's routine; brk: breakaway, for FSJ)")
             ->delimiter(',')->capture_default_str()->check(CLI::IsMember({"dyn", "brk"}));
-        sub.add_option("--db", o->db, "Maintenance database (SQLite; created if missing)")->capture_default_str();
+        sub.add_option("--db", o->db, "Maintenance database (SQLite; created if missing)")->capture_default_str()->check(sqlite_path());
         sub.add_option("--out-dir", o->out_dir, "Directory for the raw bus logs and run CSVs")->capture_default_str();
         sub.add_option("--limits", o->limits, "Limits JSON (docs/test-run.md; default: the datasheet's section-8 envelope)")
             ->check(CLI::ExistingFile);

@@ -2,6 +2,7 @@
 #include "cli/command.hpp"
 #include "core/emadiag_error.hpp"
 #include "emadiag/io/output_path.hpp"
+#include "emadiag/io/text_field.hpp"
 #include "estimation/health_estimate.hpp"
 #include "estimation/nn_trainer.hpp"
 
@@ -67,7 +68,7 @@ const bool registered = register_command(Command{
         sub.add_option("--goal", o->goal, "Training MSE goal, normalised [0, 1] space (the paper: 1e-6)")->default_val(1e-6);
         return [o] {
             // Checked before training (minutes), not only when the model is written.
-            if (const auto problem = io::output_path_problem(o->out, "network model")) throw EmadiagError(*problem);
+            io::check_output_path<EmadiagError>(o->out, "network model", io::OutputInputs({o->dataset}));
             const Dataset d = read_dataset(o->dataset);
             TrainOptions t;
             t.spec.load_case = sim::to_string(d.spec.load_case);
@@ -93,7 +94,7 @@ const bool registered = register_command(Command{
             rep.model.training["dataset"] = o->dataset;
             rep.model.training["dataset_seed"] = d.spec.seed;
             rep.model.training["noise"] = sim::to_string(d.spec.noise);
-            rep.model.save(o->out);
+            rep.model.save(o->out, io::OutputInputs({o->dataset}));
             std::printf("trained %d-%d-%zu network on case %s, sequence %s, noise %s: %d runs (%zu/%zu/%zu)\n",
                         t.spec.input_count(), t.spec.hidden_neurons, t.spec.outputs.size(), t.spec.load_case.c_str(),
                         t.spec.sequence.c_str(), sim::to_string(d.spec.noise).c_str(), static_cast<int>(f.x.cols()),
@@ -107,7 +108,7 @@ const bool registered = register_command(Command{
                             rep.mse.test_per_output[k], rep.model.std_error_normalised[k]);
             }
             std::printf("95 %% interval coverage on the test runs: %.1f %%\n", 100.0 * rep.test_coverage95);
-            std::printf("wrote %s\n", o->out.c_str());
+            std::printf("wrote %s\n", io::escape_text(o->out).c_str());
             return 0;
         };
     }});

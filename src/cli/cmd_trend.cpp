@@ -213,8 +213,8 @@ const bool registered = register_command(Command{
             if (o->out.empty()) {
                 std::cout << text.str();
             } else {
-                write_output(o->out, text.str());
-                std::cerr << "wrote the " << format << " report of " << o->tail << " to " << o->out << " (" << text.str().size() << " bytes)\n";
+                write_output(o->out, text.str(), database_input(o->db));
+                std::cerr << "wrote the " << format << " report of " << o->tail << " to " << escape_text(o->out) << " (" << text.str().size() << " bytes)\n";
             }
             return 0;
         };

@@ -5,6 +5,7 @@
 // record of a tail in the open format of docs/record-format.md, for the operator's MRO system. JSON
 // is one document; CSV is one file per table in the directory --out (required).
 #include "cli/command.hpp"
+#include "cli/db_source.hpp"
 #include "cli/output_file.hpp"
 
 #include "core/emadiag_error.hpp"
@@ -13,6 +14,8 @@
 #include "emadiag/db/test_session_store.hpp"
 
 #include <nlohmann/json.hpp>
+
+#include <sys/stat.h>
 
 #include <chrono>
 #include <filesystem>
@@ -69,15 +72,20 @@ std::string cell(const std::optional<std::int64_t>& v) { return v ? std::to_stri
 /// Writes one CSV table into `dir`, whole or not at all.
 class CsvTable {
 public:
-    CsvTable(std::filesystem::path path, const std::string& header) : path_(std::move(path)) { text_ << header << '\n'; }
+    CsvTable(std::filesystem::path path, const std::string& header, io::OutputInputs inputs)
+        : path_(std::move(path)), inputs_(std::move(inputs)) {
+        io::check_output_path<EmadiagError>(path_.string(), "output", inputs_);  // every table checked before any is written
+        text_ << header << '\n';
+    }
     void row(const std::vector<std::string>& fields) {
         for (std::size_t i = 0; i < fields.size(); ++i) text_ << (i ? "," : "") << csv_field(fields[i]);
         text_ << '\n';
     }
-    void write() { write_output(path_.string(), text_.str()); }
+    void write() { write_output(path_.string(), text_.str(), inputs_); }
 
 private:
     std::filesystem::path path_;
+    io::OutputInputs inputs_;
     std::ostringstream text_;
 };
 
@@ -182,20 +190,24 @@ json export_json(db::Database& database, const std::string& tail, bool samples, 
 }
 
 void export_csv(db::Database& database, const std::string& tail, bool samples, const std::filesystem::path& dir) {
+    const io::OutputInputs inputs({}, {database.path()});
+    struct stat st {};
+    if (::lstat(dir.c_str(), &st) == 0 && !S_ISDIR(st.st_mode))
+        throw EmadiagError("export directory " + dir.string() + " is not a directory (a file, a link, a device or a FIFO); refusing to write into it");
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
     if (ec) throw EmadiagError(dir.string() + ": cannot create the export directory: " + ec.message());
     CsvTable sessions(dir / "sessions.csv",
                       "session_id,tail_number,position,ata_reference,actuator_serial,phase,started_utc,cycles,hours,operator_id,technician_name,"
                       "technician_certificate,work_performed,source,tool_version,verdict,verdict_note,limits_json,limits_sha256,amends_session_id,"
-                      "correction_reason,prev_sha256,content_sha256");
-    CsvTable findings(dir / "findings.csv", "session_id,parameter,estimator,value,std_error,limit_kind,limit_value,status,note");
-    CsvTable artifacts(dir / "artifacts.csv", "session_id,role,name,sha256");
+                      "correction_reason,prev_sha256,content_sha256", inputs);
+    CsvTable findings(dir / "findings.csv", "session_id,parameter,estimator,value,std_error,limit_kind,limit_value,status,note", inputs);
+    CsvTable artifacts(dir / "artifacts.csv", "session_id,role,name,sha256", inputs);
     CsvTable runs(dir / "runs.csv",
                   "run_id,session_id,actuator_serial,started_utc,source,load_case,sequence,k_t_nm_per_a,j_kgm2,tau,sample_period_s,valid,"
-                  "status_note,meta_json,raw_log_format,raw_log_sha256");
-    CsvTable estimates(dir / "estimates.csv", "run_id,estimator,parameter,value,std_error,identifiable,method,note");
-    CsvTable sample_rows(dir / "samples.csv", "run_id,sample_index,t_s,current_a,speed_rad_s,theta_m_rad,hinge_moment_nm,command_deg");
+                  "status_note,meta_json,raw_log_format,raw_log_sha256", inputs);
+    CsvTable estimates(dir / "estimates.csv", "run_id,estimator,parameter,value,std_error,identifiable,method,note", inputs);
+    CsvTable sample_rows(dir / "samples.csv", "run_id,sample_index,t_s,current_a,speed_rad_s,theta_m_rad,hinge_moment_nm,command_deg", inputs);
     for (const auto& s : full_sessions(database, tail, true)) {
         sessions.row({std::to_string(s.session_id), s.tail_number, s.position.value_or(""), s.position ? s.position_ata : "", s.actuator_serial,
                       s.phase, s.started_utc, cell(s.cycles), cell(s.hours_h), s.operator_id, s.technician_name, s.technician_certificate,
@@ -220,16 +232,16 @@ void export_csv(db::Database& database, const std::string& tail, bool samples, c
                 }
         }
     }
-    CsvTable installations(dir / "installations.csv", "installation_id,tail_number,position,from_serial,to_serial,detected_utc,cycles,hours,session_id");
+    CsvTable installations(dir / "installations.csv", "installation_id,tail_number,position,from_serial,to_serial,detected_utc,cycles,hours,session_id", inputs);
     for (const auto& i : db::list_installations(database, tail))
         installations.row({std::to_string(i.installation_id), i.tail_number, i.position, i.from_serial, i.to_serial, i.detected_utc, cell(i.cycles),
                            cell(i.hours_h), std::to_string(i.session_id)});
     CsvTable discovery(dir / "discovery_findings.csv",
-                       "finding_id,tail_number,position,actuator_serial,found_utc,summary,status,amends_finding_id,tool_version,model_json,content_sha256");
+                       "finding_id,tail_number,position,actuator_serial,found_utc,summary,status,amends_finding_id,tool_version,model_json,content_sha256", inputs);
     for (const auto& f : db::list_discovery_findings(database, tail))
         discovery.row({std::to_string(f.finding_id), f.tail_number, f.position.value_or(""), f.actuator_serial, f.found_utc, f.summary, f.status,
                        cell(f.amends_finding_id), f.tool_version, f.model_json, f.content_sha256});
-    CsvTable positions(dir / "positions.csv", "position,ata_reference,description");
+    CsvTable positions(dir / "positions.csv", "position,ata_reference,description", inputs);
     for (const auto& p : db::list_positions(database)) positions.row({p.position, p.ata_reference, p.description});
     for (auto* t : {&sessions, &findings, &artifacts, &runs, &estimates, &sample_rows, &installations, &discovery, &positions}) t->write();
 }
@@ -246,7 +258,7 @@ const bool verify_registered = register_command(Command{
     [](CLI::App& sub) -> std::function<int()> {
         auto db_path = std::make_shared<std::string>("maintenance.db");
         auto tail = std::make_shared<std::string>();
-        sub.add_option("--db", *db_path, "Maintenance database (SQLite)")->capture_default_str()->check(CLI::ExistingFile);
+        sub.add_option("--db", *db_path, "Maintenance database (SQLite)")->capture_default_str()->check(sqlite_file());
         sub.add_option("--tail", *tail, "Aircraft tail number")->required();
         return [db_path, tail] {
             db::Database database(*db_path);
@@ -258,7 +270,7 @@ const bool verify_registered = register_command(Command{
             const auto problems = database.integrity_problems(db::Database::IntegrityScope::Full);
             const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
             std::ostringstream file_line;
-            file_line << "emadiag verify: database file " << database.path() << ": PRAGMA quick_check of every page "
+            file_line << "emadiag verify: database file " << escape_text(database.path()) << ": PRAGMA quick_check of every page "
                       << (problems.empty() ? "ok" : "FAILED") << " (" << std::fixed << std::setprecision(2) << seconds << " s)\n";
             if (c.ok()) {
                 std::cout << "emadiag verify: tail " << *tail << ": " << c.sessions_checked << " sessions, hash chain intact; head " << c.head_sha256
@@ -266,10 +278,10 @@ const bool verify_registered = register_command(Command{
             } else {
                 std::cout << "emadiag verify: tail " << *tail << ": RECORD CHANGED OUTSIDE THE TOOL (" << c.problems.size() << " problem(s) in "
                           << c.sessions_checked << " sessions)\n";
-                for (const auto& p : c.problems) std::cout << "  " << p << '\n';
+                for (const auto& p : c.problems) std::cout << "  " << escape_text(p) << '\n';
             }
             std::cout << file_line.str();
-            for (const auto& p : problems) std::cout << "  " << p << '\n';
+            for (const auto& p : problems) std::cout << "  " << escape_text(p) << '\n';
             if (!c.ok()) return kExitTampered;
             return problems.empty() ? 0 : kExitCorrupt;
         };
@@ -279,7 +291,7 @@ const bool export_registered = register_command(Command{
     "export", "Export the whole record of a tail (JSON, or CSV tables) in the open format of docs/record-format.md",
     [](CLI::App& sub) -> std::function<int()> {
         auto o = std::make_shared<ExportOptions>();
-        sub.add_option("--db", o->db, "Maintenance database (SQLite)")->capture_default_str()->check(CLI::ExistingFile);
+        sub.add_option("--db", o->db, "Maintenance database (SQLite)")->capture_default_str()->check(sqlite_file());
         sub.add_option("--tail", o->tail, "Aircraft tail number")->required();
         sub.add_option("--format", o->format, "json (one document) or csv (one file per table in --out DIR)")
             ->capture_default_str()
@@ -292,12 +304,12 @@ const bool export_registered = register_command(Command{
             if (o->format == "csv") {
                 if (o->out.empty()) throw EmadiagError("--format csv writes one file per table: give --out DIR");
                 export_csv(database, o->tail, !o->no_samples, o->out);
-                std::cout << "exported the record of " << o->tail << " to " << o->out << "/ (sessions, findings, artifacts, runs, estimates, samples, "
+                std::cout << "exported the record of " << o->tail << " to " << escape_text(o->out) << "/ (sessions, findings, artifacts, runs, estimates, samples, "
                           << "installations, discovery_findings, positions .csv)\n";
                 return 0;
             }
             const db::ChainCheck chain = db::verify_tail(database, o->tail);
-            write_output(o->out, export_json(database, o->tail, !o->no_samples, chain).dump(1) + "\n");
+            write_output(o->out, export_json(database, o->tail, !o->no_samples, chain).dump(1) + "\n", io::OutputInputs({}, {o->db}));
             return 0;
         };
     }});

@@ -3,10 +3,14 @@
 #include "cli/command.hpp"
 #include "cli/version.hpp"
 
+#include "emadiag/io/text_field.hpp"
+#include "emadiag/io/uri.hpp"
+
 #include <algorithm>
 #include <exception>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 namespace emadiag::cli {
 
@@ -43,13 +47,20 @@ int main(int argc, char** argv) {
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
-        return app.exit(e);
+        // CLI11 repeats what was typed (an unexpected argument, a value): no password, no escape sequence.
+        std::ostringstream out, err;
+        const int code = app.exit(e, out, err);
+        std::cout << emadiag::io::redact_uri_passwords(out.str());  // help and version text: ours
+        std::cerr << emadiag::io::escape_text(emadiag::io::redact_uri_passwords(err.str()), true);
+        return code;
     }
     try {
         apply_models_override(models_dir);
         return action ? action() : 1;
     } catch (const std::exception& e) {
-        std::cerr << "emadiag: error: " << e.what() << '\n';
+        // Messages quote file names, CSV cells and URIs: printed with control characters made visible
+        // (line breaks kept: a message may list several problems) and passwords redacted.
+        std::cerr << "emadiag: error: " << emadiag::io::escape_text(emadiag::io::redact_uri_passwords(e.what()), true) << '\n';
         return 1;
     }
 }

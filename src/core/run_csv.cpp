@@ -71,19 +71,9 @@ void write_run_csv(std::ostream& out, const Run& run) {
     }
 }
 
-void write_run_csv_file(const std::string& path, const Run& run) {
-    // Write to a temporary name and rename, so a failed write never leaves a truncated run behind.
-    if (const auto problem = io::output_path_problem(path, "run CSV")) throw EmadiagError(*problem);
-    const std::string tmp = path + ".part";
-    if (const auto problem = io::output_path_problem(tmp, "run CSV (temporary)")) throw EmadiagError(*problem);
-    {
-        std::ofstream out(tmp);
-        if (!out) throw EmadiagError("cannot open " + tmp + " for writing");
-        write_run_csv(out, run);
-        out.flush();
-        if (!out) throw EmadiagError("write to " + tmp + " failed");
-    }
-    if (std::rename(tmp.c_str(), path.c_str()) != 0) throw EmadiagError("cannot rename " + tmp + " to " + path);
+void write_run_csv_file(const std::string& path, const Run& run, const io::OutputInputs& inputs) {
+    // A unique temporary file renamed into place: a failed write never leaves a truncated run behind.
+    io::write_output_file<EmadiagError>(path, "run CSV", inputs, [&run](std::ostream& out) { write_run_csv(out, run); });
 }
 
 Run read_run_csv(std::istream& in, const std::string& name) {

@@ -4,6 +4,7 @@
 //   t_s,current_A,speed_rad_s,theta_m_rad,hinge_moment_Nm,command_deg[,more...]
 //   one row per sample
 #include "core/run.hpp"
+#include "emadiag/io/output_path.hpp"
 
 #include <iosfwd>
 #include <string>
@@ -25,7 +26,7 @@ inline constexpr std::size_t kCsvMaxBadRows = 1000;
 
 /// Writes a run; numbers with 17 significant digits so a read gives back the same doubles.
 void write_run_csv(std::ostream& out, const Run& run);
-void write_run_csv_file(const std::string& path, const Run& run);
+void write_run_csv_file(const std::string& path, const Run& run, const io::OutputInputs& inputs = {});
 
 /// Reads a run; throws EmadiagError listing every problem as "name:line: message".
 [[nodiscard]] Run read_run_csv(std::istream& in, const std::string& name);

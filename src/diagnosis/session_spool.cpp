@@ -5,6 +5,7 @@
 
 #include "can_tool/candump_run.hpp"
 #include "core/emadiag_error.hpp"
+#include "emadiag/io/output_path.hpp"
 #include "emadiag/db/database.hpp"
 
 #include <nlohmann/json.hpp>
@@ -32,36 +33,10 @@ std::string compact(const std::string& iso) {
     return s;
 }
 
-/// Writes `text` to `path` so that a crash leaves either the old file or the new one.
+/// Writes `text` to `path` so that a crash leaves either the old file or the new one (a unique
+/// temporary, never a fixed name a link could be planted at: emadiag/io/output_path.hpp).
 void write_atomically(const std::filesystem::path& path, const std::string& text) {
-    const std::filesystem::path tmp = path.string() + ".tmp";
-    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-    if (fd < 0) throw EmadiagError(tmp.string() + ": cannot write the session spool: " + std::strerror(errno));
-    std::size_t done = 0;
-    while (done < text.size()) {
-        const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) {
-            const int e = errno;
-            ::close(fd);
-            std::filesystem::remove(tmp);
-            throw EmadiagError(tmp.string() + ": cannot write the session spool: " + std::strerror(e));
-        }
-        done += static_cast<std::size_t>(n);
-    }
-    if (::fsync(fd) != 0 || ::close(fd) != 0) {
-        const int e = errno;
-        std::filesystem::remove(tmp);
-        throw EmadiagError(tmp.string() + ": cannot write the session spool: " + std::strerror(e));
-    }
-    std::error_code ec;
-    std::filesystem::rename(tmp, path, ec);
-    if (ec) throw EmadiagError(path.string() + ": cannot write the session spool: " + ec.message());
-    const int dfd = ::open(path.parent_path().c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-    if (dfd >= 0) {
-        (void)::fsync(dfd);
-        ::close(dfd);
-    }
+    io::write_output_file<EmadiagError>(path.string(), "session spool", {}, text);
 }
 
 nlohmann::json to_json(const SessionManifest& m) {

@@ -4,6 +4,7 @@
 #include "core/run_validity.hpp"
 #include "diagnosis/positions.hpp"
 #include "emadiag/db/sha256.hpp"
+#include "emadiag/io/text_field.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -61,6 +62,10 @@ void set_assessment(db::StoredTestSession& session, const Assessment& assessment
 }
 
 void set_record_info(db::StoredTestSession& session, const SessionRecordInfo& info) {
+    // Names people type: printable UTF-8, bounded (a line break would print a forged line in a report).
+    io::check_text_field<EmadiagError>("--operator", info.operator_id);
+    io::check_text_field<EmadiagError>("--technician", info.technician_name);
+    io::check_text_field<EmadiagError>("--certificate", info.technician_certificate);
     if (info.cycles && *info.cycles < 0) throw EmadiagError("--cycles " + std::to_string(*info.cycles) + " is negative");
     if (info.hours_h && !(std::isfinite(*info.hours_h) && *info.hours_h >= 0))
         throw EmadiagError("--hours " + std::to_string(*info.hours_h) + " is not a number of hours >= 0");

@@ -187,9 +187,8 @@ Dataset generate_dataset(const DatasetSpec& spec, unsigned threads, const Datase
 }
 
 void write_dataset(const std::string& path, const Dataset& dataset) {
-    if (const auto problem = io::output_path_problem(path, "dataset")) throw EmadiagError(*problem);
-    std::ofstream out(path, std::ios::binary);
-    if (!out) throw EmadiagError("cannot open " + path + " for writing");
+    io::OutputFile<EmadiagError> file(path, "dataset");  // whole or not at all (emadiag/io/output_path.hpp)
+    std::ostream& out = file.stream();
     const std::size_t samples_per_run = dataset.runs.empty() ? 0 : dataset.runs.front().samples.size();
     for (std::size_t i = 0; i < dataset.runs.size(); ++i) {
         if (dataset.runs[i].samples.size() != samples_per_run) {
@@ -239,7 +238,7 @@ void write_dataset(const std::string& path, const Dataset& dataset) {
         }
         out.write(reinterpret_cast<const char*>(row.data()), static_cast<std::streamsize>(row.size() * sizeof(double)));
     }
-    if (!out) throw EmadiagError("write error on " + path);
+    file.commit();
 }
 
 Dataset read_dataset(const std::string& path) {

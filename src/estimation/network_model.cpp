@@ -149,12 +149,8 @@ NetworkModel NetworkModel::load(const std::string& path) {
     return from_json(*j, path);
 }
 
-void NetworkModel::save(const std::string& path) const {
-    if (const auto problem = io::output_path_problem(path, "network model")) throw EmadiagError(*problem);
-    std::ofstream out(path);
-    if (!out) throw EmadiagError("cannot open " + path + " for writing");
-    out << to_json().dump() << '\n';
-    if (!out) throw EmadiagError("write error on " + path);
+void NetworkModel::save(const std::string& path, const io::OutputInputs& inputs) const {
+    io::write_output_file<EmadiagError>(path, "network model", inputs, to_json().dump() + "\n");
 }
 
 std::vector<double> NetworkModel::predict_normalised(const Run& run) const {

@@ -6,6 +6,7 @@
 #include "core/run.hpp"
 #include "estimation/health_estimate.hpp"
 #include "estimation/network.hpp"
+#include "emadiag/io/output_path.hpp"
 
 #include <nlohmann/json.hpp>
 #include <string>
@@ -22,7 +23,8 @@ public:
     static NetworkModel load(const std::string& path);
     static NetworkModel from_json(const nlohmann::json& j, const std::string& where = "model");
     [[nodiscard]] nlohmann::json to_json() const;
-    void save(const std::string& path) const;
+    /// Written whole or not at all, never over one of `inputs` (emadiag/io/output_path.hpp).
+    void save(const std::string& path, const io::OutputInputs& inputs = {}) const;
 
     /// Predicts the health parameters of a run (estimator "network"). Parameters the model does
     /// not predict are reported with identifiable = false and a note. eta_A follows from eta_O by

@@ -13,10 +13,9 @@ struct CliResult {
     std::string output;  ///< stdout, and stderr unless left out
 };
 
-/// `emadiag ARGS`; stderr is merged into the output, or discarded when merge_stderr is false.
-inline CliResult run_cli(const std::string& args, bool merge_stderr = true) {
+/// A shell command line's exit code and standard output.
+inline CliResult run_shell(const std::string& cmd) {
     CliResult r;
-    const std::string cmd = std::string(EMADIAG_CLI) + " " + args + (merge_stderr ? " 2>&1" : " 2>/dev/null");
     FILE* p = popen(cmd.c_str(), "r");
     if (!p) return r;
     std::array<char, 4096> buf{};
@@ -25,6 +24,11 @@ inline CliResult run_cli(const std::string& args, bool merge_stderr = true) {
     const int status = pclose(p);
     r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     return r;
+}
+
+/// `emadiag ARGS`; stderr is merged into the output, or discarded when merge_stderr is false.
+inline CliResult run_cli(const std::string& args, bool merge_stderr = true) {
+    return run_shell(std::string(EMADIAG_CLI) + " " + args + (merge_stderr ? " 2>&1" : " 2>/dev/null"));
 }
 
 }  // namespace emadiag::test

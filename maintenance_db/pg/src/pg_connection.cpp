@@ -1,5 +1,6 @@
 #include "emadiag/db/db_error.hpp"
 #include "emadiag/db/pg_fleet.hpp"
+#include "emadiag/io/uri.hpp"
 
 #include "pg_schema_sql.hpp"
 
@@ -56,7 +57,8 @@ void check_fleet_uri(const std::string& uri) {
         std::string m = err ? err : "cannot parse";
         if (err) PQfreemem(err);
         while (!m.empty() && m.back() == '\n') m.pop_back();
-        throw DbError("fleet server address is not a valid PostgreSQL connection URI: " + m, DbErrorKind::Invalid);
+        // libpq quotes the URI whole in its message: the password goes before it is printed.
+        throw DbError("fleet server address is not a valid PostgreSQL connection URI: " + io::redact_uri_passwords(m), DbErrorKind::Invalid);
     }
     bool has_password = false;
     for (PQconninfoOption* o = opts; o->keyword != nullptr; ++o)
@@ -73,7 +75,7 @@ PgConnection::PgConnection(const std::string& uri) : uri_(uri) {
     check_fleet_uri(uri);
     conn_ = PQconnectdb(uri.c_str());
     if (conn_ == nullptr || PQstatus(conn_) != CONNECTION_OK) {
-        const std::string msg = error_of(conn_, nullptr, "cannot connect to " + uri);
+        const std::string msg = io::redact_uri_passwords(error_of(conn_, nullptr, "cannot connect to " + uri));
         if (conn_) PQfinish(conn_);
         conn_ = nullptr;
         throw DbError(msg, DbErrorKind::Other);

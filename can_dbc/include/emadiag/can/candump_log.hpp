@@ -56,7 +56,11 @@ struct CandumpWriterBounds {
 /// path, exceptions included), so the file is complete and byte-exact once the writer is gone.
 class CandumpWriter {
 public:
-    /// Creates or truncates `path`; throws CanError naming the path when it cannot be opened.
+    /// Creates or truncates `path`; throws CanError naming the path when it cannot be opened, or when
+    /// it is a link, a device, a FIFO or a directory (emadiag/io/output_path.hpp; opened with
+    /// O_NOFOLLOW | O_NONBLOCK and checked again on the open file, so nothing is written through a
+    /// link and a FIFO never blocks). The log is written in place, not renamed at the end: a recording
+    /// cut short keeps every frame flushed so far.
     explicit CandumpWriter(const std::string& path, CandumpWriterBounds bounds = {});
     ~CandumpWriter();
     CandumpWriter(const CandumpWriter&) = delete;
@@ -70,7 +74,7 @@ public:
 private:
     std::string path_;
     CandumpWriterBounds bounds_;
-    std::ofstream out_;
+    int fd_ = -1;
     std::string buffer_;
     std::chrono::steady_clock::time_point last_flush_;
     std::size_t lines_ = 0;
