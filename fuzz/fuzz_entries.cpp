@@ -118,8 +118,17 @@ std::vector<can::CanFrame> frame_stream_frames(const std::uint8_t* data, std::si
 }
 
 void dbc(const std::uint8_t* data, std::size_t size) {
+    const std::string_view text(reinterpret_cast<const char*>(data), size);
+    // What strict reading accepts, lenient reading accepts without a warning.
+    bool strict_ok = false;
+    try {
+        (void)can::parse_dbc(text, "fuzz.dbc", can::DbcMode::Strict);
+        strict_ok = true;
+    } catch (const can::CanError&) {
+    }
     accepting_project_errors([&] {
-        const can::Database db = can::parse_dbc(std::string_view(reinterpret_cast<const char*>(data), size), "fuzz.dbc");
+        const can::Database db = can::parse_dbc(text, "fuzz.dbc");
+        if (strict_ok && !db.warnings.empty()) property_failed("DBC accepted strictly gives lenient warnings", db.warnings.front());
         // Every parsed message decodes any payload of its length, and re-encodes what it decoded
         // (a value the message cannot represent is a CanError, never a crash).
         std::array<std::uint8_t, can::kFdMaxLen> payload{};
