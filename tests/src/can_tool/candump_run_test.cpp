@@ -5,6 +5,8 @@
 #include "core/run.hpp"
 #include "emadiag/can/can_error.hpp"
 
+#include "support/text_files.hpp"
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -18,18 +20,7 @@ using ::testing::HasSubstr;
 
 namespace {
 
-std::string slurp(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
-
-std::string write(const std::string& name, const std::string& text) {
-    const std::string path = std::string(EMADIAG_BINARY_DIR) + "/candump_run_test_" + name;
-    std::ofstream(path, std::ios::binary) << text;
-    return path;
-}
+std::string write(const std::string& name, const std::string& text) { return emadiag::test::write_test_file("candump_run_test_", name, text); }
 
 /// A recorded session (12 samples; fuzz/corpus/candump/session_12.log, written by the recorder).
 const std::string kSession = std::string(EMADIAG_SOURCE_DIR) + "/fuzz/corpus/candump/session_12.log";
@@ -46,7 +37,7 @@ void expect_same_samples(const Run& a, const Run& b) {
 }  // namespace
 
 TEST(CandumpRun, ATornLastLineIsSkippedWithAWarningAndTheRunKept) {
-    const std::string text = slurp(kSession);
+    const std::string text = emadiag::test::file_bytes(kSession);
     ASSERT_FALSE(text.empty()) << kSession;
     std::vector<std::string> warnings;
     const emadiag::Run whole = read_run_candump(write("whole.log", text), [&](const std::string& w) { warnings.push_back(w); });
@@ -66,14 +57,14 @@ TEST(CandumpRun, ATornLastLineIsSkippedWithAWarningAndTheRunKept) {
 }
 
 TEST(CandumpRun, AMalformedTelemetryLineCostsItsSampleNotTheSession) {
-    std::string text = slurp(kSession);
+    std::string text = emadiag::test::file_bytes(kSession);
     // Break the first TelemetryA line (id 100): its sample is lost, the rest of the run kept, and the
     // loss shows in the telemetry counts, which decide the run's validity.
     const auto at = text.find(" vcan0 100#");
     ASSERT_NE(at, std::string::npos);
     text.replace(at + 7, 3, "1G0");
     std::vector<std::string> warnings;
-    const emadiag::Run whole = read_run_candump(write("whole2.log", slurp(kSession)));
+    const emadiag::Run whole = read_run_candump(write("whole2.log", emadiag::test::file_bytes(kSession)));
     const emadiag::Run r = read_run_candump(write("broken.log", text), [&](const std::string& w) { warnings.push_back(w); });
     ASSERT_EQ(warnings.size(), 2U);
     EXPECT_THAT(warnings[0], HasSubstr("expected hex id digits and '#'; line skipped"));

@@ -2,6 +2,8 @@
 // own ICD at run time, refused when it lacks what the tool needs), issue 25 parts 1, 2 and 4.
 #include "support/cli_runner.hpp"
 
+#include "support/text_files.hpp"
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -18,18 +20,7 @@ namespace {
 const std::string kEmaDbc = std::string(EMADIAG_SOURCE_DIR) + "/can_dbc/ema.dbc";
 const std::string kSession = std::string(EMADIAG_SOURCE_DIR) + "/fuzz/corpus/candump/session_12.log";
 
-std::string slurp(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
-
-std::string write(const std::string& name, const std::string& text) {
-    const std::string path = std::string(EMADIAG_BINARY_DIR) + "/can_check_cli_" + name;
-    std::ofstream(path, std::ios::binary) << text;
-    return path;
-}
+std::string write(const std::string& name, const std::string& text) { return emadiag::test::write_test_file("can_check_cli_", name, text); }
 
 std::string replace_all(std::string s, const std::string& from, const std::string& to) {
     for (auto at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size())) s.replace(at, from.size(), to);
@@ -59,7 +50,7 @@ TEST(CanCheckCli, WarningsOfLenientReadingAndStrictRefusal) {
 }
 
 TEST(CanCheckCli, ALogWithATornLineAndConsoleOutput) {
-    const std::string torn = write("torn.log", slurp(kSession) + "(1700000000.050000) vcan0 100#0C002");
+    const std::string torn = write("torn.log", emadiag::test::file_bytes(kSession) + "(1700000000.050000) vcan0 100#0C002");
     const std::string console = write("console.log", "  can0  680   [8]  03 22 01 00 00 00 00 00\n");
     const auto r = run_cli("can-check " + torn + " " + console);
     EXPECT_EQ(r.exit_code, 1) << r.output;
@@ -71,7 +62,7 @@ TEST(CanCheckCli, ALogWithATornLineAndConsoleOutput) {
 }
 
 TEST(CanCheckCli, RunTimeDbcIsUsedAndOneLackingWhatTheToolNeedsIsRefused) {
-    const std::string ema = slurp(kEmaDbc);
+    const std::string ema = emadiag::test::file_bytes(kEmaDbc);
     ASSERT_NE(ema.find("MotorCurrent"), std::string::npos);
     // The actuator's own DBC: the ICD plus a message of its own.
     const std::string own = write("own.dbc", ema + "\nBO_ 1536 SUPPLIER_Extra: 8 EMA\n SG_ Extra : 0|8@1+ (1,0) [0|255] \"\" TOOL\n");

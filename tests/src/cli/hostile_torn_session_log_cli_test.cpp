@@ -7,6 +7,8 @@
 #include "support/cli_runner.hpp"
 #include "support/node_runner.hpp"
 
+#include "support/text_files.hpp"
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -20,13 +22,6 @@ using ::testing::AllOf;
 using ::testing::HasSubstr;
 
 namespace {
-
-std::string slurp(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
 
 std::string out_path(const std::string& name) { return std::string(EMADIAG_BINARY_DIR) + "/torn_session_cli_" + name; }
 
@@ -52,7 +47,7 @@ TEST(HostileTornSessionLog, GivesTheSameEstimatesAndSaysWhichLineWasSkipped) {
     const auto out = rec.record(interrupt);
     ASSERT_EQ(out.status, "complete");
     ema.stop();
-    const std::string whole = slurp(ro.log_path);
+    const std::string whole = emadiag::test::file_bytes(ro.log_path);
     ASSERT_GT(count_lines(whole), 2000U);
     // Then one more line, cut mid-byte with no final newline: a TelemetryA frame the recorder was
     // writing when it was killed.
