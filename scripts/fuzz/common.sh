@@ -1,5 +1,7 @@
+# shellcheck shell=bash
 # Shared by scripts/fuzz/run_fuzz.sh (the gate's deterministic stage) and scripts/fuzz/explore.sh
 # (longer exploration outside the gate). Sourced from the repository root.
+# shellcheck disable=SC2034  # used by the scripts that source this file
 fuzz_all_targets=(dbc candump run_csv frame_stream model_json limits_json dataset)
 
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:symbolize=1

@@ -33,16 +33,16 @@ for t in "${targets[@]}"; do
   corpus=build-asan/explore/$t
   fuzz_fill_corpus "$t" "$corpus"
   regressions=$(fuzz_regression_dir "$t")
-  [ -d "$regressions" ] && cp -n "$regressions"/* "$corpus"/ 2>/dev/null || true
+  if [ -d "$regressions" ]; then cp -n "$regressions"/* "$corpus"/ 2>/dev/null || true; fi
   seed=${FUZZ_SEED:-$(od -An -N4 -tu4 /dev/urandom | tr -d ' ')}
   log=build-asan/explore_$t.log
-  before=$(ls build-asan/findings | wc -l)
+  before=$(find build-asan/findings -type f | wc -l)
   echo "== fuzz_$t: $seconds s, seed $seed, corpus $(ls "$corpus" | wc -l) files =="
   status=ok
   build-asan/fuzz/fuzz_"$t" "$corpus" -seed="$seed" -max_total_time="$seconds" -fork=1 -ignore_crashes=1 -ignore_timeouts=1 \
     -ignore_ooms=1 -print_final_stats=1 -timeout=10 -rss_limit_mb=2048 -max_len=65536 \
     -artifact_prefix=build-asan/findings/"$t"- >"$log" 2>&1 || status=FAILED
-  after=$(ls build-asan/findings | wc -l)
+  after=$(find build-asan/findings -type f | wc -l)
   if [ "$after" -gt "$before" ] || [ "$status" = FAILED ]; then
     status=FOUND
     found+=("$t")
