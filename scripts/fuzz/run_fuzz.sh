@@ -48,7 +48,8 @@ for t in "${targets[@]}"; do
   stored=("$corpus")
   [ -d "$regressions" ] && stored+=("$regressions")
   log=build-asan/fuzz_$t.log
-  n_regressions=$(ls "$regressions" 2>/dev/null | wc -l)
+  n_regressions=0
+  [ -d "$regressions" ] && n_regressions=$(find "$regressions" -type f | wc -l)
   echo "== fuzz_$t: $(ls "$corpus" | wc -l) seeds and $n_regressions kept findings once each, then seed $seed for $runs executions =="
   status=ok
   # 1. The stored inputs, each once (libFuzzer does not write into its corpus directories with -runs=0).
