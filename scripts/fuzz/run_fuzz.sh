@@ -6,8 +6,9 @@
 #      files that fit) and the kept findings (tests/data/fuzz_regressions/<target>/);
 #   2. a mutation run with a fixed seed and a fixed number of executions (-seed=FUZZ_SEED, default 1;
 #      -runs=FUZZ_RUNS, default 20000), from a fresh copy of the seeds (nothing carried over from an
-#      earlier run), with -reload=0 (libFuzzer otherwise rereads its corpus directory once a second)
-#      and address-space randomisation off (setarch -R: the comparisons libFuzzer records to guide
+#      earlier run), with what libFuzzer does by the clock turned off (-reload=0: it rereads its
+#      corpus directory once a second; -purge_allocator_interval=-1: it purges the allocator once a
+#      second, which moves later allocations) and address-space randomisation off (setarch -R: the comparisons libFuzzer records to guide
 #      its mutations include pointer values, so with randomisation two runs of seed 1 differed, cov
 #      466 and 468 after 8000 executions of fuzz_candump; without it, 3 of 3 runs gave the same
 #      corpus and coverage).
@@ -56,7 +57,7 @@ for t in "${targets[@]}"; do
   if ! "${norandom[@]}" build-asan/fuzz/fuzz_"$t" "${stored[@]}" -runs=0 "${common[@]}" -artifact_prefix=build-asan/findings/"$t"- >"$log" 2>&1; then
     status=FAILED
   # 2. Fixed seed, fixed count, from the fresh copy of the seeds.
-  elif ! "${norandom[@]}" build-asan/fuzz/fuzz_"$t" "$corpus" -seed="$seed" -runs="$runs" -reload=0 "${common[@]}" \
+  elif ! "${norandom[@]}" build-asan/fuzz/fuzz_"$t" "$corpus" -seed="$seed" -runs="$runs" -reload=0 -purge_allocator_interval=-1 "${common[@]}" \
          -artifact_prefix=build-asan/findings/"$t"- >>"$log" 2>&1; then
     status=FAILED
   fi
