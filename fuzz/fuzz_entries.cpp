@@ -118,8 +118,17 @@ std::vector<can::CanFrame> frame_stream_frames(const std::uint8_t* data, std::si
 }
 
 void dbc(const std::uint8_t* data, std::size_t size) {
+    const std::string_view text(reinterpret_cast<const char*>(data), size);
+    // What strict reading accepts, lenient reading accepts without a warning.
+    bool strict_ok = false;
+    try {
+        (void)can::parse_dbc(text, "fuzz.dbc", can::DbcMode::Strict);
+        strict_ok = true;
+    } catch (const can::CanError&) {
+    }
     accepting_project_errors([&] {
-        const can::Database db = can::parse_dbc(std::string_view(reinterpret_cast<const char*>(data), size), "fuzz.dbc");
+        const can::Database db = can::parse_dbc(text, "fuzz.dbc");
+        if (strict_ok && !db.warnings.empty()) property_failed("DBC accepted strictly gives lenient warnings", db.warnings.front());
         // Every parsed message decodes any payload of its length, and re-encodes what it decoded
         // (a value the message cannot represent is a CanError, never a crash).
         std::array<std::uint8_t, can::kFdMaxLen> payload{};
@@ -139,24 +148,37 @@ void dbc(const std::uint8_t* data, std::size_t size) {
 }
 
 void candump(const std::uint8_t* data, std::size_t size) {
-    std::istringstream in(as_text(data, size));
+    // Lenient reading (a session's log) keeps every good line; strict reading of the same text
+    // either refuses it or gives the same frames.
     std::vector<can::CandumpRecord> records;
+    can::CandumpReport report;
     try {
-        records = can::read_candump(in, "fuzz.log");
+        std::istringstream in(as_text(data, size));
+        records = can::read_candump(in, "fuzz.log", can::CandumpMode::Lenient, &report);
     } catch (const can::CanError&) {
         return;
     }
-    // What was read is written and read back to the same frame.
+    if (records.size() != report.frames + report.error_frames)
+        property_failed("candump report counts", std::to_string(records.size()) + " records, report " + report.summary());
+    try {
+        std::istringstream in(as_text(data, size));
+        const auto strict = can::read_candump(in, "fuzz.log", can::CandumpMode::Strict);
+        if (strict.size() != records.size()) property_failed("candump strict and lenient disagree", report.summary());
+    } catch (const can::CanError&) {
+    }
+    // What was read is written and read back to the same frame, interface and (microsecond) time.
     for (const auto& r : records) {
         const std::string line = can::format_candump_line(r.frame, r.iface);
         std::string error;
         const auto back = can::parse_candump_line(line, error);
         if (!back) property_failed("candump line written from a read frame does not parse", line + ": " + error);
         const can::CanFrame &a = r.frame, &b = back->frame;
-        if (a.id != b.id || a.extended != b.extended || a.fd != b.fd || a.rtr != b.rtr || a.error != b.error || a.len != b.len ||
-            std::memcmp(a.data.data(), b.data.data(), a.len) != 0) {
+        if (a.id != b.id || a.extended != b.extended || a.fd != b.fd || a.brs != b.brs || a.esi != b.esi || a.rtr != b.rtr ||
+            a.error != b.error || a.len != b.len || std::memcmp(a.data.data(), b.data.data(), a.len) != 0) {
             property_failed("candump round trip changed the frame", line);
         }
+        if (r.iface != back->iface) property_failed("candump round trip changed the interface name", line);
+        if (a.timestamp.count() / 1000 != b.timestamp.count() / 1000) property_failed("candump round trip changed the time", line);
     }
 }
 

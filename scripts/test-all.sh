@@ -64,10 +64,10 @@ if ! wait "$asan_build"; then
   exit 1
 fi
 tail -n 2 build/sanitizer-build.log
-stage "libFuzzer targets, 30 s each (the ThreadSanitizer build compiles beside them: build/tsan-build.log)"
+stage "libFuzzer targets: stored inputs, then fixed seeds (the ThreadSanitizer build compiles beside them: build/tsan-build.log)"
 EMADIAG_TSAN_BUILD_ONLY=1 nice -n 10 scripts/sanitize/run_tsan.sh >build/tsan-build.log 2>&1 &
 tsan_build=$!
-scripts/fuzz/run_fuzz.sh 30
+scripts/fuzz/run_fuzz.sh
 stage "unit tests (ASan + UBSan)"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build-asan -L unit -j "$(nproc)" --output-on-failure

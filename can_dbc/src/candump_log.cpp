@@ -13,7 +13,9 @@
 
 #include <cctype>
 #include <cstdio>
+#include <cstdint>
 #include <istream>
+#include <optional>
 
 namespace emadiag::can {
 namespace {
@@ -30,6 +32,84 @@ constexpr std::uint8_t kFdFlagBrs = 0x1;
 constexpr std::uint8_t kFdFlagEsi = 0x2;
 constexpr std::size_t kStandardIdDigits = 3;
 constexpr std::size_t kExtendedIdDigits = 8;
+/// The raw DLCs above 8 that candump -8 writes after an 8-byte frame ("_9".."_F").
+constexpr int kMinRawDlc = 9;
+
+/// Reads "_X" at line[i] (X a raw DLC 9..F, then the end or a space); advances i past it.
+bool parse_raw_dlc(std::string_view line, std::size_t& i, std::uint8_t& raw_dlc) {
+    if (i + 1 >= line.size() || line[i] != '_' || hex_value(line[i + 1]) < kMinRawDlc) return false;
+    if (i + 2 < line.size() && !std::isspace(static_cast<unsigned char>(line[i + 2]))) return false;
+    raw_dlc = static_cast<std::uint8_t>(hex_value(line[i + 1]));
+    i += 2;
+    return true;
+}
+
+bool is_blank(std::string_view line) {
+    for (char c : line)
+        if (!std::isspace(static_cast<unsigned char>(c))) return false;
+    return true;
+}
+
+std::vector<std::string_view> tokens(std::string_view line) {
+    std::vector<std::string_view> out;
+    std::size_t i = 0;
+    while (i < line.size()) {
+        while (i < line.size() && std::isspace(static_cast<unsigned char>(line[i]))) ++i;
+        const std::size_t start = i;
+        while (i < line.size() && !std::isspace(static_cast<unsigned char>(line[i]))) ++i;
+        if (i > start) out.push_back(line.substr(start, i - start));
+    }
+    return out;
+}
+
+bool all_hex(std::string_view s) {
+    if (s.empty()) return false;
+    for (char c : s)
+        if (hex_value(c) < 0) return false;
+    return true;
+}
+
+/// Plain `candump can0` console output: "  can0  123   [8]  11 22 ..." (with -t, a "(time)" first).
+bool looks_like_console_output(std::string_view line) {
+    auto t = tokens(line);
+    if (!t.empty() && t[0].front() == '(' && t[0].back() == ')') t.erase(t.begin());
+    return t.size() >= 3 && all_hex(t[1]) && t[2].size() >= 3 && t[2].front() == '[' && t[2].back() == ']';
+}
+
+/// A CAN XL line of candump -l: "(time) iface PPP#FF:SS:AAAAAAAA#data" (priority id, then flags,
+/// SDT and acceptance field separated by ':').
+bool is_can_xl_line(std::string_view line) {
+    const auto t = tokens(line);
+    if (t.size() < 3 || t[0].front() != '(') return false;
+    const std::string_view frame = t[2];
+    const std::size_t hash = frame.find('#');
+    return hash != std::string_view::npos && hash + 3 < frame.size() && hex_value(frame[hash + 1]) >= 0 &&
+           hex_value(frame[hash + 2]) >= 0 && frame[hash + 3] == ':';
+}
+
+/// candump's "DROPCOUNT: dropped N CAN frame(s) on 'can0' socket (total drops M)"; returns N.
+std::optional<std::uint64_t> dropcount(std::string_view line) {
+    const auto t = tokens(line);
+    if (t.empty() || t[0] != "DROPCOUNT:") return std::nullopt;
+    std::uint64_t n = 0;
+    if (t.size() >= 3 && t[1] == "dropped") {
+        for (char c : t[2]) {
+            if (!std::isdigit(static_cast<unsigned char>(c)) || n > (UINT64_MAX - 9) / 10) return std::uint64_t{0};
+            n = n * 10 + static_cast<std::uint64_t>(c - '0');
+        }
+    }
+    return n;
+}
+
+/// `s` cut to `max` bytes with every byte outside printable ASCII shown as '?' (a note quotes a line).
+std::string printable(std::string_view s, std::size_t max) {
+    std::string out(s.substr(0, max));
+    for (char& c : out)
+        if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7F) c = '?';
+    return out;
+}
+
+std::string plural(std::size_t n, const std::string& word) { return std::to_string(n) + " " + word + (n == 1 ? "" : "s"); }
 
 }  // namespace
 
@@ -115,6 +195,11 @@ std::optional<CandumpRecord> parse_candump_line(std::string_view line, std::stri
         f.id = id;
     } else if (id_digits == kExtendedIdDigits) {
         if (id & kCanErrFlag) {
+            // Bits 30 and 31 are CAN_RTR_FLAG and CAN_EFF_FLAG, never set in an error frame's id:
+            // the error class is the 29 bits below CAN_ERR_FLAG (fuzz_candump finding, issue 21 item 17).
+            if (id > (kCanErrFlag | kExtendedIdMask))
+                return fail(id_start, "error frame id " + std::string(line.substr(id_start, id_digits)) +
+                                          " has bits above CAN_ERR_FLAG 20000000 and the 29-bit error class");
             f.error = true;
             f.id = id & ~kCanErrFlag;
         } else if (id > kExtendedIdMask) {
@@ -142,6 +227,9 @@ std::optional<CandumpRecord> parse_candump_line(std::string_view line, std::stri
         if (i < line.size() && std::isdigit(static_cast<unsigned char>(line[i]))) {
             if (line[i] > '8') return fail(i, "remote request length above 8");
             f.len = static_cast<std::uint8_t>(line[i++] - '0');
+            if (f.len == kClassicMaxLen && i < line.size() && line[i] == '_') {
+                if (!parse_raw_dlc(line, i, r.raw_dlc)) return fail(i, "expected a raw DLC 9..F after '_'");
+            }
         }
         if (i < line.size() && !std::isspace(static_cast<unsigned char>(line[i])))
             return fail(i, "unexpected text after the remote request");
@@ -151,6 +239,11 @@ std::optional<CandumpRecord> parse_candump_line(std::string_view line, std::stri
         if (line[i] == '.') {  // optional byte separator
             ++i;
             continue;
+        }
+        if (line[i] == '_') {  // candump -8: the raw DLC of an 8-byte classic frame
+            if (f.fd || n != kClassicMaxLen) return fail(i, "a raw DLC suffix '_' follows exactly 8 data bytes of a classic frame");
+            if (!parse_raw_dlc(line, i, r.raw_dlc)) return fail(i, "expected a raw DLC 9..F after '_'");
+            break;
         }
         if (i + 1 >= line.size() || hex_value(line[i]) < 0 || hex_value(line[i + 1]) < 0)
             return fail(i, "expected data as pairs of hex digits");
@@ -165,55 +258,141 @@ std::optional<CandumpRecord> parse_candump_line(std::string_view line, std::stri
     return r;
 }
 
-void for_each_candump_record(std::istream& in, const std::string& name, const std::function<void(CandumpRecord&&)>& on_record) {
-    std::vector<std::string> errors;
+std::string CandumpReport::summary() const {
+    std::string s = plural(frames, "frame");
+    if (fd_frames > 0 || remote_frames > 0) {
+        s += " (";
+        if (fd_frames > 0) s += std::to_string(fd_frames) + " CAN FD";
+        if (fd_frames > 0 && remote_frames > 0) s += ", ";
+        if (remote_frames > 0) s += std::to_string(remote_frames) + " remote";
+        s += ")";
+    }
+    if (error_frames > 0) s += ", " + plural(error_frames, "error frame");
+    std::vector<std::string> skipped;
+    if (skipped_lines > 0) skipped.push_back(plural(skipped_lines, "torn or malformed line"));
+    if (can_xl_lines > 0) skipped.push_back(plural(can_xl_lines, "CAN XL line"));
+    if (dropcount_lines > 0) skipped.push_back(plural(dropcount_lines, "DROPCOUNT notice") + " (candump lost " +
+                                               plural(static_cast<std::size_t>(frames_dropped_by_candump), "frame") + ")");
+    if (!skipped.empty()) {
+        s += "; skipped ";
+        for (std::size_t i = 0; i < skipped.size(); ++i) s += (i > 0 ? ", " : "") + skipped[i];
+    }
+    if (raw_dlc_suffixes > 0) s += "; ignored " + std::to_string(raw_dlc_suffixes) + " raw DLC suffix" + (raw_dlc_suffixes == 1 ? "" : "es") + " (\"_E\")";
+    if (time_steps_back > 0) s += "; time went back " + plural(time_steps_back, "time");
+    return s;
+}
+
+CandumpReport for_each_candump_record(std::istream& in, const std::string& name, const std::function<void(CandumpRecord&&)>& on_record,
+                                      CandumpMode mode) {
+    CandumpReport rep;
+    std::vector<std::string> errors;  // strict mode: the bad lines
     std::size_t bad_lines = 0;
     std::string line;
     std::size_t lineno = 0;
     bool too_long = false;
-    auto bad = [&](std::string text) {
-        if (++bad_lines <= kCandumpMaxReportedErrors) errors.push_back(name + ":" + std::to_string(lineno) + ":" + text);
+    bool first_content = true;
+    std::optional<std::chrono::nanoseconds> last_time;
+    auto note = [&](std::string text) {
+        if (rep.messages.size() < kCandumpMaxReportedErrors) rep.messages.push_back(std::move(text));
+        else ++rep.messages_left_out;
+    };
+    auto where = [&](const std::string& col) { return name + ":" + std::to_string(lineno) + ":" + col; };
+    auto bad = [&](const std::string& text) {  // text: "col: message"
+        ++bad_lines;
+        rep.last_line_torn = in.eof();  // no final newline after this line: so far the last one
+        if (mode == CandumpMode::Strict) {
+            if (errors.size() < kCandumpMaxReportedErrors) errors.push_back(where(text));
+        } else {
+            ++rep.skipped_lines;
+            note(where(text) + "; line skipped");
+        }
     };
     while (io::read_bounded_line(in, line, kCandumpMaxLineBytes, too_long)) {
         ++lineno;
+        ++rep.lines;
+        rep.last_line_torn = false;
         if (too_long) {
             bad("1: line longer than the limit kCandumpMaxLineBytes = " + std::to_string(kCandumpMaxLineBytes) + " bytes");
             continue;
         }
         if (!line.empty() && line.back() == '\r') line.pop_back();
-        bool blank = true;
-        for (char c : line) blank = blank && std::isspace(static_cast<unsigned char>(c));
-        if (blank) continue;
+        if (is_blank(line)) continue;
+        if (first_content && looks_like_console_output(line)) {
+            throw CanError(where("1") + ": this is the console output of plain `candump can0` (\"IFACE ID [LEN] BYTES\"), not a " +
+                           "candump log: it has no receive timestamps; record the bus with `candump -l` (or `emadiag record`)");
+        }
+        first_content = false;
+        if (const auto dropped = dropcount(line)) {
+            ++rep.dropcount_lines;
+            rep.frames_dropped_by_candump += *dropped;
+            note(where("1") + ": candump's own notice \"" + printable(line, 120) + "\": the recording lost " +
+                 plural(static_cast<std::size_t>(*dropped), "frame") + " here; line skipped");
+            continue;
+        }
+        if (is_can_xl_line(line)) {
+            ++rep.can_xl_lines;
+            note(where("1") + ": CAN XL frame, not supported (CAN and CAN FD only); line skipped");
+            continue;
+        }
         std::string err;
         auto r = parse_candump_line(line, err);
-        if (r) on_record(std::move(*r));
-        else bad(err);
+        if (!r) {
+            bad(err);
+            continue;
+        }
+        if (r->frame.error) ++rep.error_frames;
+        else {
+            ++rep.frames;
+            if (r->frame.fd) ++rep.fd_frames;
+            if (r->frame.rtr) ++rep.remote_frames;
+        }
+        if (r->raw_dlc != 0) {
+            if (rep.raw_dlc_suffixes++ == 0)
+                note(where("1") + ": raw DLC suffix \"_" + std::string(1, "0123456789ABCDEF"[r->raw_dlc]) +
+                     "\" (candump -8) ignored; the 8 data bytes are kept (and on every such line after this one)");
+        }
+        if (last_time && r->frame.timestamp < *last_time && rep.time_steps_back++ == 0)
+            note(where("1") + ": timestamp earlier than the line before; frames kept in file order (and on every such line after this one)");
+        last_time = r->frame.timestamp;
+        on_record(std::move(*r));
     }
     if (in.bad()) throw CanError(name + ": read error after line " + std::to_string(lineno));
-    if (bad_lines > 0) {
-        std::string all = std::to_string(bad_lines) + " bad line" + (bad_lines == 1 ? "" : "s") + " in candump log " + name +
-                          (bad_lines > errors.size() ? " (the first " + std::to_string(errors.size()) + " listed)" : "") + ":";
-        for (const auto& e : errors) all += "\n" + e;
+    if (rep.last_line_torn && mode == CandumpMode::Lenient)
+        note(name + ":" + std::to_string(lineno) + ": the last line is incomplete and has no final newline: the recording was cut short");
+    const bool nothing_good = bad_lines > 0 && rep.frames == 0 && rep.error_frames == 0;
+    if (bad_lines > 0 && (mode == CandumpMode::Strict || nothing_good)) {
+        std::vector<std::string> listed = errors;
+        if (mode == CandumpMode::Lenient)
+            for (const auto& m : rep.messages) listed.push_back(m);
+        std::string all = plural(bad_lines, "bad line") + " in candump log " + name +
+                          (mode == CandumpMode::Lenient ? " and no good frame" : "") +
+                          (bad_lines > listed.size() ? " (the first " + std::to_string(listed.size()) + " listed)" : "") + ":";
+        for (const auto& e : listed) all += "\n" + e;
         throw CanError(all);
     }
+    return rep;
 }
 
-std::vector<CandumpRecord> read_candump(std::istream& in, const std::string& name) {
+std::vector<CandumpRecord> read_candump(std::istream& in, const std::string& name, CandumpMode mode, CandumpReport* report) {
     std::vector<CandumpRecord> out;
-    for_each_candump_record(in, name, [&](CandumpRecord&& r) {
-        if (out.size() >= kCandumpMaxRecords) {
-            throw CanError(name + ": more than the limit kCandumpMaxRecords = " + std::to_string(kCandumpMaxRecords) +
-                           " frames for a log held in memory (replay); split the log");
-        }
-        out.push_back(std::move(r));
-    });
+    CandumpReport rep = for_each_candump_record(
+        in, name,
+        [&](CandumpRecord&& r) {
+            if (out.size() >= kCandumpMaxRecords) {
+                throw CanError(name + ": more than the limit kCandumpMaxRecords = " + std::to_string(kCandumpMaxRecords) +
+                               " frames for a log held in memory (replay); split the log");
+            }
+            out.push_back(std::move(r));
+        },
+        mode);
+    if (report) *report = std::move(rep);
     return out;
 }
 
-std::vector<CandumpRecord> read_candump_file(const std::string& path) {
-    std::ifstream in(path);
+std::vector<CandumpRecord> read_candump_file(const std::string& path, CandumpMode mode, CandumpReport* report) {
+    std::ifstream in(path, std::ios::binary);
     if (!in) throw CanError(path + ": cannot open the candump log");
-    return read_candump(in, path);
+    return read_candump(in, path, mode, report);
 }
 
 CandumpWriter::CandumpWriter(const std::string& path, CandumpWriterBounds bounds)

@@ -64,7 +64,7 @@ struct LimitExceeded {
 
 class Parser {
 public:
-    Parser(std::string_view text, std::string file) : text_(text), file_(std::move(file)) {}
+    Parser(std::string_view text, std::string file, DbcMode mode) : text_(text), file_(std::move(file)), mode_(mode) {}
 
     Database run() {
         try {
@@ -94,6 +94,11 @@ public:
             for (const auto& e : errors_) all += "\n" + e.text;
             throw CanError(all);
         }
+        std::stable_sort(warnings_.begin(), warnings_.end(), [](const Problem& a, const Problem& b) {
+            return a.line != b.line ? a.line < b.line : a.col < b.col;
+        });
+        for (auto& w : warnings_) db_.warnings.push_back(std::move(w.text));
+        if (dropped_warnings_ > 0) db_.warnings.push_back(file_ + ": " + std::to_string(dropped_warnings_) + " more warnings not listed");
         return std::move(db_);
     }
 
@@ -220,6 +225,20 @@ private:
         errors_.push_back(Problem{line, col, file_ + ":" + std::to_string(line) + ":" + std::to_string(col) + ": " + message});
     }
     void error(const Token& t, const std::string& message) { error(t.line, t.col, message); }
+    /// A problem cantools' lenient mode lets pass: an error in strict mode, else a warning that says
+    /// what was skipped or kept.
+    void soft(int line, int col, const std::string& message, const std::string& outcome) {
+        if (mode_ == DbcMode::Strict) {
+            error(line, col, message);
+            return;
+        }
+        if (warnings_.size() >= kDbcMaxReportedProblems) {
+            ++dropped_warnings_;
+            return;
+        }
+        warnings_.push_back(Problem{line, col, file_ + ":" + std::to_string(line) + ":" + std::to_string(col) + ": " + message + "; " + outcome});
+    }
+    void soft(const Token& t, const std::string& message, const std::string& outcome) { soft(t.line, t.col, message, outcome); }
 
     void expect_punct(const char* p) {
         const Token& t = peek();
@@ -254,6 +273,19 @@ private:
         next();
         return v;
     }
+    /// A signal's minimum or maximum: lenient reading keeps a value beyond the double range as
+    /// +-infinity (or 0), as cantools does, with a warning; it is never used to scale a value.
+    double limit_number(const char* what) {
+        const Token& t = peek();
+        if (t.kind != Tok::Number || mode_ == DbcMode::Strict) return number(what);
+        errno = 0;
+        char* end = nullptr;
+        const double v = std::strtod(t.text.c_str(), &end);
+        if (end != t.text.c_str() + t.text.size()) return number(what);
+        if (errno == ERANGE) soft(t, std::string("number '") + t.text + "' for " + what + " is beyond the double range", "kept as " + std::to_string(v));
+        next();
+        return v;
+    }
     /// A value-description key (VAL_, VAL_TABLE_): a whole number that fits a signed 64-bit raw value.
     std::int64_t value_key(const char* what) {
         const Token t = peek();
@@ -275,7 +307,13 @@ private:
         next();
         return v;
     }
-    void expect_semicolon() { expect_punct(";"); }
+    void expect_semicolon() {
+        if (peek().kind == Tok::End && mode_ == DbcMode::Lenient) {  // cantools accepts a last statement without it
+            soft(peek(), "expected ';' at the end of the file", "statement kept");
+            return;
+        }
+        expect_punct(";");
+    }
 
     /// Skips to the next keyword that starts a line (after an error in the statement at `start`).
     void recover(std::size_t start) {
@@ -361,6 +399,7 @@ private:
         current_ = nullptr;
         if (name == "VECTOR__INDEPENDENT_SIG_MSG") {  // CANdb++ pseudo-message for unattached signals
             ignore_signals_ = true;
+            placeholder_ids_.insert(raw_id);
             return;
         }
         ignore_signals_ = false;
@@ -374,18 +413,27 @@ private:
             error(id_tok, "message '" + name + "': id " + std::to_string(raw_id) + " is out of range (standard ids up to 2047; extended ids need bit 31 set and at most 0x1FFFFFFF)");
             ok = false;
         }
-        if (dlc > kFdMaxLen || !is_valid_fd_len(dlc)) {
+        if (dlc > kFdMaxLen) {
             error(dlc_tok, "message '" + name + "': length " + std::to_string(dlc) + " bytes is not a CAN or CAN FD length (0-8, 12, 16, 20, 24, 32, 48, 64)");
             ok = false;
+        } else if (!is_valid_fd_len(dlc)) {  // J1939 transport-protocol messages (10, 15, 19 ... bytes)
+            soft(dlc_tok, "message '" + name + "': length " + std::to_string(dlc) + " bytes is not a CAN or CAN FD length (0-8, 12, 16, 20, 24, 32, 48, 64)",
+                 "kept: decoded from a payload of " + std::to_string(dlc) + " bytes (a transport-protocol message)");
         }
         m.length = static_cast<std::uint32_t>(dlc);
         m.is_fd = dlc > kClassicMaxLen;
         if (ok && db_.find_message(m.id, m.extended)) {
-            error(id_tok, "message '" + name + "': id " + format_id(m.id, m.extended) + " is already used by message '" + db_.find_message(m.id, m.extended)->name + "'");
+            soft(id_tok, "message '" + name + "': id " + format_id(m.id, m.extended) + " is already used by message '" + db_.find_message(m.id, m.extended)->name + "'",
+                 "message '" + name + "' and its signals skipped");
+            if (mode_ == DbcMode::Lenient) {
+                ignore_signals_ = true;
+                return;
+            }
         }
         if (db_.messages.size() >= kDbcMaxMessages) {
             throw LimitExceeded{kw.line, kw.col, "more than the limit kDbcMaxMessages = " + std::to_string(kDbcMaxMessages) + " messages"};
         }
+        message_pos_[m.name] = id_tok;
         db_.messages.push_back(std::move(m));
         current_ = &db_.messages.back();
         current_ok_ = ok;
@@ -401,6 +449,8 @@ private:
             const std::string& m = mt.text;
             if (m == "M") {
                 s.mux_role = MuxRole::Multiplexor;
+            } else if (m == "m") {  // no value: cantools' lenient mode reads the signal as a plain one
+                soft(mt, "multiplexer indicator 'm' without a value for signal '" + s.name + "'", "read as a plain signal");
             } else if (m.size() >= 2 && m[0] == 'm' && std::isdigit(static_cast<unsigned char>(m[1]))) {
                 std::size_t j = 1;
                 while (j < m.size() && std::isdigit(static_cast<unsigned char>(m[j]))) ++j;
@@ -437,9 +487,9 @@ private:
         s.offset = number("offset");
         expect_punct(")");
         expect_punct("[");
-        s.minimum = number("minimum");
+        s.minimum = limit_number("minimum");
         expect_punct("|");
-        s.maximum = number("maximum");
+        s.maximum = limit_number("maximum");
         expect_punct("]");
         s.unit = string_lit("unit string");
         while (peek().kind == Tok::Ident && !(peek().line_start && keywords().count(peek().text))) {
@@ -456,8 +506,12 @@ private:
             error(start_tok, "signal '" + s.name + "': start bit " + std::to_string(start) + " is beyond 511");
             return;
         }
-        if (len == 0 || len > 64) {
-            error(len_tok, "signal '" + s.name + "': length " + std::to_string(len) + " bits; allowed 1 to 64");
+        if (len == 0) {
+            error(len_tok, "signal '" + s.name + "': length 0 bits; allowed 1 to 64");
+            return;
+        }
+        if (len > 64) {
+            soft(len_tok, "signal '" + s.name + "': length " + std::to_string(len) + " bits; allowed 1 to 64", "signal skipped");
             return;
         }
         s.start_bit = static_cast<std::uint32_t>(start);
@@ -470,11 +524,14 @@ private:
             throw LimitExceeded{kw.line, kw.col, "more than the limit kDbcMaxSignals = " + std::to_string(kDbcMaxSignals) + " signals"};
         }
         if (current_->find_signal(s.name)) {
-            error(name_tok, "signal '" + s.name + "' is defined twice in message '" + current_->name + "'");
+            soft(name_tok, "signal '" + s.name + "' is defined twice in message '" + current_->name + "'", "the second one skipped");
             return;
         }
         if (current_ok_) {
-            if (auto e = s.compute_layout(current_->length)) error(start_tok, *e + " ('" + current_->name + "')");
+            if (auto e = s.compute_layout(current_->length)) {
+                soft(start_tok, *e + " ('" + current_->name + "')", "signal '" + s.name + "' skipped");
+                return;
+            }
         }
         current_->signals.push_back(std::move(s));
         signal_pos_[current_->name + "." + current_->signals.back().name] = name_tok;
@@ -485,14 +542,17 @@ private:
         const auto id = static_cast<std::uint32_t>(raw_id & ~std::uint64_t{kDbcExtendedFlag});
         for (auto& m : db_.messages)
             if (m.id == id && m.extended == ext) return &m;
-        error(at, "unknown message id " + std::to_string(raw_id));
+        if (placeholder_ids_.count(raw_id))
+            soft(at, "message id " + std::to_string(raw_id) + " is CANdb++'s placeholder VECTOR__INDEPENDENT_SIG_MSG (signals in no message)",
+                 "statement skipped");
+        else soft(at, "unknown message id " + std::to_string(raw_id), "statement skipped");
         return nullptr;
     }
     Signal* signal_of(Message* m, const Token& at, const std::string& name) {
         if (m == nullptr) return nullptr;
         for (auto& s : m->signals)
             if (s.name == name) return &s;
-        error(at, "message '" + m->name + "' has no signal '" + name + "'");
+        soft(at, "message '" + m->name + "' has no signal '" + name + "'", "statement skipped");
         return nullptr;
     }
 
@@ -558,13 +618,19 @@ private:
             throw SyntaxError{tt.line, tt.col, "attribute '" + d.name + "': unknown type '" + type + "' (expected INT, HEX, FLOAT, STRING or ENUM)"};
         }
         expect_semicolon();
-        if (db_.attribute_definitions.count(d.name)) error(name_tok, "attribute '" + d.name + "' is defined twice");
+        if (db_.attribute_definitions.count(d.name)) soft(name_tok, "attribute '" + d.name + "' is defined twice", "the later definition kept");
         db_.attribute_definitions[d.name] = std::move(d);
     }
 
     /// Reads an attribute value token (number or string) and checks it against the definition.
-    AttributeValue attribute_literal(const AttributeDefinition* def, const Token& at) {
-        AttributeValue v;
+    struct Literal {
+        AttributeValue value;
+        bool skip = false;  ///< lenient: not stored (a warning said so)
+    };
+    Literal attribute_literal(const AttributeDefinition* def, const Token& at) {
+        Literal lit;
+        AttributeValue& v = lit.value;
+        bool& skip = lit.skip;
         if (peek().kind == Tok::String) {
             v.is_string = true;
             v.text = next().text;
@@ -572,14 +638,18 @@ private:
             v.number = number("attribute value");
             v.text = at.text;
         }
-        if (def == nullptr) return v;
+        if (def == nullptr) {
+            skip = true;
+            return lit;
+        }
         const bool numeric = def->type == AttributeType::Int || def->type == AttributeType::Hex || def->type == AttributeType::Float;
         if (numeric && v.is_string) {
-            error(at, "attribute '" + def->name + "' is numeric, found string \"" + v.text + "\"");
+            soft(at, "attribute '" + def->name + "' is numeric, found string \"" + v.text + "\"", "kept as a string");
         } else if (def->type == AttributeType::String && !v.is_string) {
-            error(at, "attribute '" + def->name + "' is a STRING, found number " + at.text);
+            soft(at, "attribute '" + def->name + "' is a STRING, found number " + at.text, "kept as a number");
         } else if (numeric && (def->minimum != 0 || def->maximum != 0) && (v.number < def->minimum || v.number > def->maximum)) {
-            error(at, "attribute '" + def->name + "': value " + at.text + " outside [" + std::to_string(def->minimum) + ", " + std::to_string(def->maximum) + "]");
+            soft(at, "attribute '" + def->name + "': value " + at.text + " outside [" + std::to_string(def->minimum) + ", " + std::to_string(def->maximum) + "]",
+                 "kept as written");
         } else if (def->type == AttributeType::Enum) {
             if (v.is_string) {
                 bool found = false;
@@ -588,14 +658,19 @@ private:
                         v.number = static_cast<double>(i);
                         found = true;
                     }
-                if (!found) error(at, "attribute '" + def->name + "': \"" + v.text + "\" is not one of its ENUM values");
+                if (!found) {
+                    soft(at, "attribute '" + def->name + "': \"" + v.text + "\" is not one of its ENUM values", "value skipped");
+                    skip = true;
+                }
             } else if (v.number < 0 || v.number >= static_cast<double>(def->enum_values.size())) {
-                error(at, "attribute '" + def->name + "': ENUM index " + at.text + " outside 0.." + std::to_string(def->enum_values.size() - 1));
+                soft(at, "attribute '" + def->name + "': ENUM index " + at.text + " outside 0.." + std::to_string(def->enum_values.size() - 1),
+                     "value skipped");
+                skip = true;
             } else {
                 v.text = def->enum_values[static_cast<std::size_t>(v.number)];
             }
         }
-        return v;
+        return lit;
     }
 
     void attribute_default() {
@@ -603,11 +678,11 @@ private:
         const Token nt = peek();
         const std::string name = string_lit("attribute name");
         auto it = db_.attribute_definitions.find(name);
-        if (it == db_.attribute_definitions.end()) error(nt, "BA_DEF_DEF_ for undefined attribute '" + name + "'");
+        if (it == db_.attribute_definitions.end()) soft(nt, "BA_DEF_DEF_ for undefined attribute '" + name + "'", "statement skipped");
         const Token vt = peek();
-        AttributeValue v = attribute_literal(it == db_.attribute_definitions.end() ? nullptr : &it->second, vt);
+        Literal v = attribute_literal(it == db_.attribute_definitions.end() ? nullptr : &it->second, vt);
         expect_semicolon();
-        if (it != db_.attribute_definitions.end()) it->second.default_value = v;
+        if (it != db_.attribute_definitions.end() && !v.skip) it->second.default_value = v.value;
     }
 
     void attribute_value() {
@@ -616,7 +691,7 @@ private:
         const std::string name = string_lit("attribute name");
         auto it = db_.attribute_definitions.find(name);
         const AttributeDefinition* def = it == db_.attribute_definitions.end() ? nullptr : &it->second;
-        if (def == nullptr) error(nt, "BA_ for undefined attribute '" + name + "'");
+        if (def == nullptr) soft(nt, "BA_ for undefined attribute '" + name + "'", "statement skipped");
         std::map<std::string, AttributeValue>* target = &db_.network_attributes;
         AttributeObject object = AttributeObject::Network;
         std::map<std::string, AttributeValue> discard;
@@ -646,11 +721,14 @@ private:
                 fail(nt, "BU_, BO_, SG_ or EV_");
             }
         }
-        if (def != nullptr && def->object != object) error(nt, "attribute '" + name + "' is not defined for this kind of object");
+        if (def != nullptr && def->object != object) {
+            soft(nt, "attribute '" + name + "' is not defined for this kind of object", "statement skipped");
+            target = &discard;
+        }
         const Token vt = peek();
-        AttributeValue v = attribute_literal(def, vt);
+        Literal v = attribute_literal(def, vt);
         expect_semicolon();
-        (*target)[name] = v;
+        if (def != nullptr && !v.skip) (*target)[name] = v.value;
     }
 
     void value_descriptions() {
@@ -720,10 +798,11 @@ private:
         expect_semicolon();
         if (s == nullptr) return;
         if (m->find_signal(sw) == nullptr) {
-            error(swt, "message '" + m->name + "' has no multiplexor switch '" + sw + "'");
+            error(swt, "message '" + m->name + "' has no multiplexor switch '" + sw + "' (multiplexing that cannot be evaluated)");
             return;
         }
         s->multiplexor = sw;
+        mux_pos_[m->name + "." + s->name] = swt;
         if (!extended_mux_seen_.count(s)) s->mux_ranges.clear();
         extended_mux_seen_.insert(s);
         s->mux_ranges.insert(s->mux_ranges.end(), ranges.begin(), ranges.end());
@@ -743,14 +822,42 @@ private:
                     switch_sig = &s;
                     ++switches;
                 }
+            std::set<std::string> orphans;  // lenient: multiplexed signals without a multiplexor, never decoded
             for (auto& s : m.signals) {
                 if ((s.mux_role == MuxRole::Multiplexed || s.mux_role == MuxRole::MultiplexedMultiplexor) && s.multiplexor.empty()) {
                     const Token& at = signal_pos_[m.name + "." + s.name];
-                    if (switch_sig == nullptr) error(at, "signal '" + s.name + "' is multiplexed but message '" + m.name + "' has no multiplexor (M) signal");
+                    if (switch_sig == nullptr) {
+                        soft(at, "signal '" + s.name + "' is multiplexed but message '" + m.name + "' has no multiplexor (M) signal", "signal skipped");
+                        orphans.insert(s.name);
+                    }
                     else if (switches > 1) error(at, "signal '" + s.name + "': message '" + m.name + "' has several multiplexors; SG_MUL_VAL_ must name the switch");
                     else s.multiplexor = switch_sig->name;
                 }
             }
+            check_multiplexing(m);
+            // A switch named by SG_MUL_VAL_ that is not a multiplexor (M or mNM): cantools never
+            // decodes the signals it would select (nor those they select in turn).
+            for (bool more = true; more;) {
+                more = false;
+                for (const auto& s : m.signals) {
+                    if (s.multiplexor.empty() || orphans.count(s.name)) continue;
+                    const Signal* sw = m.find_signal(s.multiplexor);
+                    if (sw == nullptr || sw == &s) continue;  // refused by check_multiplexing
+                    if (orphans.count(sw->name)) {
+                        orphans.insert(s.name);
+                        more = true;
+                    } else if (sw->mux_role != MuxRole::Multiplexor && sw->mux_role != MuxRole::MultiplexedMultiplexor) {
+                        soft(mux_position(m, s), "signal '" + s.name + "': its multiplexor '" + sw->name + "' is not marked as a multiplexor (M)",
+                             "signal skipped");
+                        orphans.insert(s.name);
+                        more = true;
+                    }
+                }
+            }
+            if (!orphans.empty())
+                m.signals.erase(std::remove_if(m.signals.begin(), m.signals.end(), [&](const Signal& s) { return orphans.count(s.name) > 0; }),
+                                m.signals.end());
+            apply_long_names(m);
             if (auto it = m.attributes.find("GenMsgCycleTime"); it != m.attributes.end()) m.cycle_time_ms_ = it->second.number;
             else if (cycle_def != db_.attribute_definitions.end() && cycle_def->second.default_value)
                 m.cycle_time_ms_ = cycle_def->second.default_value->number;
@@ -760,6 +867,88 @@ private:
                 format = format_def->second.default_value->text;
             if (format.find("CANFD") != std::string::npos) m.is_fd = true;
         }
+    }
+
+    /// The position to name for a signal's multiplexing: its SG_MUL_VAL_, else its SG_ line.
+    const Token& mux_position(const Message& m, const Signal& s) {
+        const std::string key = m.name + "." + s.name;
+        if (auto it = mux_pos_.find(key); it != mux_pos_.end()) return it->second;
+        return signal_pos_[key];
+    }
+
+    /// Multiplexing that cannot be evaluated is refused in both modes (issue 25 part 3): a signal
+    /// multiplexed by itself, a multiplexor that is not in the message, or a cycle of multiplexors
+    /// (Message::is_active follows the chain and would never end).
+    void check_multiplexing(const Message& m) {
+        const std::size_t n = m.signals.size();
+        std::map<std::string_view, std::size_t> index;
+        for (std::size_t i = 0; i < n; ++i) index.emplace(m.signals[i].name, i);
+        constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+        std::vector<std::size_t> parent(n, kNone);
+        for (std::size_t i = 0; i < n; ++i) {
+            const Signal& s = m.signals[i];
+            if (s.multiplexor.empty()) continue;
+            if (s.multiplexor == s.name) {
+                error(mux_position(m, s), "signal '" + s.name + "' of message '" + m.name + "' is multiplexed by itself (multiplexing that cannot be evaluated)");
+            } else if (auto it = index.find(s.multiplexor); it == index.end()) {
+                error(mux_position(m, s), "signal '" + s.name + "': its multiplexor '" + s.multiplexor + "' is not in message '" + m.name + "'");
+            } else {
+                parent[i] = it->second;
+            }
+        }
+        // Each signal's chain of multiplexors, followed once (0 = not seen, 1 = on the current path, 2 = done).
+        std::vector<int> state(n, 0);
+        for (std::size_t i = 0; i < n; ++i) {
+            std::vector<std::size_t> path;
+            std::size_t j = i;
+            while (j != kNone && state[j] == 0) {
+                state[j] = 1;
+                path.push_back(j);
+                j = parent[j];
+            }
+            if (j != kNone && state[j] == 1) {  // a cycle: the part of the path from j
+                std::string names;
+                const auto from = std::find(path.begin(), path.end(), j);
+                for (auto k = from; k != path.end(); ++k) names += m.signals[*k].name + " -> ";
+                names += m.signals[j].name;
+                error(mux_position(m, m.signals[j]), "signal '" + m.signals[j].name + "' of message '" + m.name +
+                                                         "': its multiplexors form a cycle (" + names + "), multiplexing that cannot be evaluated");
+            }
+            for (std::size_t k : path) state[k] = 2;
+        }
+    }
+
+    /// The long name CANdb++ keeps for a name cut to 32 characters: the SystemSignalLongSymbol /
+    /// SystemMessageLongSymbol attribute (what cantools reads), else ...LongName; empty when none.
+    static std::string long_name(const std::map<std::string, AttributeValue>& attributes, const char* symbol, const char* name) {
+        for (const char* key : {symbol, name})
+            if (auto it = attributes.find(key); it != attributes.end() && it->second.is_string && !it->second.text.empty()) return it->second.text;
+        return {};
+    }
+
+    /// Long names replace the DBC names (at most 32 characters), as cantools does; multiplexor
+    /// references follow the new names. A long name already used in its message (or among the
+    /// messages) is a warning, and the short name stays.
+    void apply_long_names(Message& m) {
+        std::map<std::string, std::string> renamed;
+        for (auto& s : m.signals) {
+            const std::string longer = long_name(s.attributes, "SystemSignalLongSymbol", "SystemSignalLongName");
+            if (longer.empty() || longer == s.name) continue;
+            if (m.find_signal(longer) != nullptr) {
+                soft(signal_pos_[m.name + "." + s.name], "signal '" + s.name + "': long name '" + longer + "' is already a signal of message '" + m.name + "'",
+                     "short name kept");
+                continue;
+            }
+            renamed[s.name] = longer;
+            s.name = longer;
+        }
+        for (auto& s : m.signals)
+            if (auto it = renamed.find(s.multiplexor); it != renamed.end()) s.multiplexor = it->second;
+        const std::string longer = long_name(m.attributes, "SystemMessageLongSymbol", "SystemMessageLongName");
+        if (longer.empty() || longer == m.name) return;
+        if (db_.find_message(longer) != nullptr)
+            soft(message_pos_[m.name], "message '" + m.name + "': long name '" + longer + "' is already a message name", "short name kept");
+        else m.name = longer;
     }
 
     std::string_view text_;
@@ -773,23 +962,29 @@ private:
     };
     std::vector<Problem> errors_;
     std::size_t dropped_errors_ = 0;
+    DbcMode mode_;
+    std::vector<Problem> warnings_;
+    std::size_t dropped_warnings_ = 0;
+    std::set<std::uint64_t> placeholder_ids_;  ///< raw BO_ ids of VECTOR__INDEPENDENT_SIG_MSG
     std::size_t signal_count_ = 0;
     Database db_;
     Message* current_ = nullptr;
     bool current_ok_ = true;
     bool ignore_signals_ = false;
     std::map<std::string, Token> signal_pos_;
+    std::map<std::string, Token> mux_pos_;      ///< "message.signal" -> its SG_MUL_VAL_ switch name
+    std::map<std::string, Token> message_pos_;  ///< message name -> its BO_ id
     std::set<const Signal*> extended_mux_seen_;
 };
 
 }  // namespace
 
-Database parse_dbc(std::string_view text, const std::string& file_name) {
+Database parse_dbc(std::string_view text, const std::string& file_name, DbcMode mode) {
     if (text.size() > kDbcMaxBytes) {
         throw CanError(file_name + ": " + std::to_string(text.size()) + " bytes exceed the limit kDbcMaxBytes = " +
                        std::to_string(kDbcMaxBytes) + " for a DBC file");
     }
-    Database db = Parser(text, file_name).run();
+    Database db = Parser(text, file_name, mode).run();
     return db;
 }
 

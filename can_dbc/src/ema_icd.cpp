@@ -3,6 +3,7 @@
 #include "emadiag/can/can_error.hpp"
 
 #include <cmath>
+#include <memory>
 
 namespace emadiag::can {
 namespace {
@@ -24,8 +25,70 @@ double value_of(const std::vector<DecodedSignal>& v, std::string_view name) {
 
 }  // namespace
 
+namespace {
+
+/// What the tool reads and writes of each ICD message (every name ema_icd.cpp uses).
+struct Needed {
+    std::uint32_t id;
+    const char* message;
+    std::vector<const char*> signals;
+};
+const std::vector<Needed>& needed() {
+    static const std::vector<Needed> n = {
+        {icd::kToolCommandId, "TOOL_Command", {"Command", "Sequence", "SessionId"}},
+        {icd::kToolHeartbeatId, "TOOL_Heartbeat", {"HeartbeatCounter"}},
+        {icd::kStatusId, "EMA_Status", {"Mode", "WeightOnWheels", "MaintenanceEnable", "SequenceState", "ActiveSequence", "LoadCase",
+                                        "StatusCounter", "StatusSessionId", "SamplesSent", "FaultCode"}},
+        {icd::kCommandAckId, "EMA_CommandAck", {"AckCommand", "AckResult", "AckSessionId"}},
+        {icd::kIdentId, "EMA_Ident", {"IdentPage", "SerialNumber", "FirmwareMajor", "FirmwareMinor", "FirmwarePatch", "PartNumber",
+                                      "SamplePeriod", "TorqueConstant", "Inertia", "GearRatio"}},
+        {icd::kTelemetryAId, "EMA_TelemetryA", {"SampleIndexA", "CounterA", "MotorCurrent", "MotorSpeed", "CrcA"}},
+        {icd::kTelemetryBId, "EMA_TelemetryB", {"SampleIndexB", "CounterB", "MotorAngle", "HingeMoment", "CrcB"}},
+    };
+    return n;
+}
+
+/// The DBC given at run time (--dbc); null: the built-in ema.dbc.
+std::unique_ptr<Database>& run_time_database() {
+    static std::unique_ptr<Database> db;
+    return db;
+}
+
+}  // namespace
+
+std::vector<std::string> missing_icd_items(const Database& db) {
+    std::vector<std::string> missing;
+    for (const auto& n : needed()) {
+        const Message* m = db.find_message(n.id, false);
+        if (m == nullptr || m->name != n.message) {
+            missing.push_back(std::string("message ") + n.message + " (standard id " + format_id(n.id, false) + ")" +
+                              (m != nullptr ? ": that id is message '" + m->name + "'" : std::string()));
+            continue;
+        }
+        for (const char* sname : n.signals)
+            if (m->find_signal(sname) == nullptr) missing.push_back(std::string("signal ") + n.message + "." + sname);
+    }
+    return missing;
+}
+
+std::vector<std::string> use_ema_dbc_file(const std::string& path, DbcMode mode) {
+    auto db = std::make_unique<Database>(parse_dbc_file(path, mode));
+    const auto missing = missing_icd_items(*db);
+    if (!missing.empty()) {
+        std::string all = path + ": this DBC lacks " + std::to_string(missing.size()) + " item" + (missing.size() == 1 ? "" : "s") +
+                          " of the EMA ICD the tool needs (can_dbc/ICD.md):";
+        for (const auto& m : missing) all += "\n  " + m;
+        throw CanError(all);
+    }
+    (void)EmaIcd(*db);  // the layout checks of the codec (CRC position)
+    std::vector<std::string> warnings = db->warnings;
+    run_time_database() = std::move(db);
+    return warnings;
+}
+
 const Database& ema_database() {
-    static const Database db = parse_dbc(ema_dbc_text(), "ema.dbc");
+    if (const auto& db = run_time_database()) return *db;
+    static const Database db = parse_dbc(ema_dbc_text(), "ema.dbc", DbcMode::Strict);
     return db;
 }
 

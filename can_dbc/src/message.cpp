@@ -89,7 +89,7 @@ const Message& Database::message(std::string_view msg_name) const {
     return *m;
 }
 
-Database parse_dbc_file(const std::string& path) {
+Database parse_dbc_file(const std::string& path, DbcMode mode) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw CanError(path + ": cannot open the DBC file");
     std::string text;
@@ -101,7 +101,7 @@ Database parse_dbc_file(const std::string& path) {
         }
     }
     if (in.bad()) throw CanError(path + ": read error");
-    return parse_dbc(text, path);
+    return parse_dbc(text, path, mode);
 }
 
 }  // namespace emadiag::can

@@ -5,6 +5,7 @@
 
 #include "emadiag/io/text_field.hpp"
 #include "emadiag/io/uri.hpp"
+#include "emadiag/can/ema_icd.hpp"
 
 #include <algorithm>
 #include <exception>
@@ -34,6 +35,13 @@ int main(int argc, char** argv) {
     app.set_version_flag("--version", [] { return version_text(); }, "Print the release, git description, build type, build id and SIMD targets");
     std::string models_dir;
     app.add_option("--models", models_dir, "Folder of the shipped network models, instead of the installed one (as EMADIAG_MODELS_DIR)");
+    // The actuator's own ICD for every command that speaks CAN (issue 25 part 1); given before or
+    // after the command name (fallthrough).
+    std::string dbc_path;
+    bool dbc_strict = false;
+    app.add_option("--dbc", dbc_path, "the actuator's DBC (ICD) instead of the built-in ema.dbc; refused when it lacks a message or signal the tool needs");
+    app.add_flag("--dbc-strict", dbc_strict, "read --dbc strictly: a problem cantools' lenient mode lets pass refuses the file");
+    app.fallthrough();
     auto& cmds = registry();
     std::sort(cmds.begin(), cmds.end(), [](const Command& a, const Command& b) { return a.name < b.name; });
     std::function<int()> action;
@@ -56,6 +64,9 @@ int main(int argc, char** argv) {
     }
     try {
         apply_models_override(models_dir);
+        if (!dbc_path.empty())
+            for (const auto& w : emadiag::can::use_ema_dbc_file(dbc_path, dbc_strict ? emadiag::can::DbcMode::Strict : emadiag::can::DbcMode::Lenient))
+                std::cerr << "emadiag: warning: " << emadiag::io::escape_text(w, true) << '\n';
         return action ? action() : 1;
     } catch (const std::exception& e) {
         // Messages quote file names, CSV cells and URIs: printed with control characters made visible

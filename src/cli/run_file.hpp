@@ -5,6 +5,7 @@
 #include "core/run.hpp"
 #include "core/run_csv.hpp"
 
+#include <cstdio>
 #include <string>
 
 namespace emadiag::cli {
@@ -14,7 +15,9 @@ inline bool ends_with(const std::string& s, const std::string& suffix) {
 }
 
 inline Run read_run_any(const std::string& path) {
-    if (ends_with(path, ".log")) return read_run_candump(path);
+    // A session log keeps its good frames; what was skipped is said on stderr (issue 25 part 4).
+    if (ends_with(path, ".log"))
+        return read_run_candump(path, [](const std::string& w) { std::fprintf(stderr, "emadiag: warning: %s\n", w.c_str()); });
     if (!ends_with(path, ".csv")) throw EmadiagError(path + ": unknown run format; expected RUN.csv (run CSV) or RUN.log (candump)");
     return read_run_csv_file(path);
 }

@@ -30,9 +30,10 @@ bool decoded(const std::vector<DecodedSignal>& v, const std::string& name) {
     return false;
 }
 
+/// The refusal of `text` in strict mode (today's refusals; lenient mode is tested in dbc_lenient_test.cpp).
 std::string parse_error(const std::string& text) {
     try {
-        (void)parse_dbc(text, "t.dbc");
+        (void)parse_dbc(text, "t.dbc", DbcMode::Strict);
     } catch (const CanError& e) {
         return e.what();
     }
@@ -131,7 +132,7 @@ TEST(DbcParser, ReportsEveryProblemWithFileLineColumn) {
     const std::string path = kData + "malformed_many.dbc";
     std::string what;
     try {
-        (void)parse_dbc_file(path);
+        (void)parse_dbc_file(path, DbcMode::Strict);
     } catch (const CanError& e) {
         what = e.what();
     }

@@ -102,8 +102,13 @@ struct EmaNode::Running {
     std::optional<can::CanFrame> held;  ///< a frame held back to go out after the next one
 };
 
-EmaNode::EmaNode(can::CanBus& bus, EmaNodeConfig config)
-    : bus_(bus), config_(std::move(config)), fault_rng_(config_.faults.seed) {
+const NodeClock& steady_node_clock() {
+    static const SteadyNodeClock clock;
+    return clock;
+}
+
+EmaNode::EmaNode(can::CanBus& bus, EmaNodeConfig config, const NodeClock& clock)
+    : bus_(bus), clock_(clock), config_(std::move(config)), fault_rng_(config_.faults.seed) {
     config_.faults.validate();
     config_.sim.params.validate();
     if (!(config_.time_scale >= 1.0 && config_.time_scale <= kMaxTimeScale))
@@ -117,7 +122,7 @@ EmaNode::EmaNode(can::CanBus& bus, EmaNodeConfig config)
     status_.weight_on_wheels = config_.faults.refuse_ground_test != Interlock::WeightOffWheels;
     status_.maintenance_enable = config_.faults.refuse_ground_test != Interlock::MaintenanceDisabled;
     status_.load_case = icd_load_case(config_.sim.load_case);
-    next_status_ = Clock::now();
+    next_status_ = now();
 }
 
 void EmaNode::event(const std::string& what) {
@@ -146,7 +151,7 @@ void EmaNode::flush_tx() {
     // Near the watchdog deadline, frame by frame with a check before each: a process descheduled
     // between a check and its write then leaks at most one frame past the deadline, never a batch.
     const bool near_deadline = status_.mode == Mode::GroundTest && status_.state == SequenceState::Running &&
-                               Clock::now() - last_heartbeat_ > config_.heartbeat_timeout - kBatchGuard;
+                               now() - last_heartbeat_ > config_.heartbeat_timeout - kBatchGuard;
     if (near_deadline) {
         const std::size_t queued_before = tx_.size();
         bool expired = false;
@@ -188,7 +193,7 @@ HeartbeatGapStats EmaNode::heartbeat_gaps() const {
 
 std::optional<std::chrono::steady_clock::duration> EmaNode::tool_idle() const {
     if (!last_tool_frame_) return std::nullopt;
-    return Clock::now() - *last_tool_frame_;
+    return now() - *last_tool_frame_;
 }
 
 void EmaNode::send_status() {
@@ -201,7 +206,7 @@ void EmaNode::run(const std::atomic<bool>& stop) {
 }
 
 void EmaNode::poll(std::chrono::microseconds max_wait) {
-    auto now = Clock::now();
+    auto now = clock_.now();
     // Sleep until the next thing that is due (status, a window of samples), at most max_wait.
     Clock::time_point due = std::min(next_status_, now + max_wait);
     if (run_ && run_->streaming && run_->next < run_->samples.size()) {
@@ -213,7 +218,7 @@ void EmaNode::poll(std::chrono::microseconds max_wait) {
     // Everything queued in one receive call (recvmmsg on SocketCAN).
     rx_.clear();
     (void)bus_.receive_batch(rx_, kReceiveBatch, std::max(wait, std::chrono::microseconds{0}));
-    now = Clock::now();
+    now = clock_.now();
     for (const auto& r : rx_) {
         if (r.status == can::ReceiveStatus::Frame) handle(r.frame, now);
         else if (r.status == can::ReceiveStatus::BusOff) event("bus-off: " + r.detail);
@@ -264,7 +269,7 @@ void EmaNode::handle(const can::CanFrame& f, Clock::time_point now) {
         // got to it, so a late pass cannot stretch the 100 ms deadline.
         Clock::time_point arrival = now;
         if (f.timestamp.count() > 0) {
-            const auto age = std::chrono::system_clock::now().time_since_epoch() - f.timestamp;
+            const auto age = clock_.since_epoch() - f.timestamp;
             if (age > Clock::duration::zero() && age < config_.heartbeat_timeout)
                 arrival = now - std::chrono::duration_cast<Clock::duration>(age);
         }
@@ -345,7 +350,7 @@ void EmaNode::start_sequence(const can::ToolCommand& c, Clock::time_point) {
 
 bool EmaNode::watchdog_expired() {
     // Heartbeat watchdog (ICD: TOOL_Heartbeat missing > 100 ms in GROUND_TEST aborts and holds).
-    const auto now = Clock::now();
+    const auto now = clock_.now();
     if (status_.mode == Mode::GroundTest && status_.state == SequenceState::Running &&
         now - last_heartbeat_ > config_.heartbeat_timeout) {
         finish(SequenceState::Aborted, FaultCode::HeartbeatLost,

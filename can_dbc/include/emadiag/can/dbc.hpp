@@ -1,7 +1,11 @@
 #pragma once
 // A DBC database: nodes, messages, signals, comments, value tables, attributes.
 // parse_dbc() reads standard DBC (Vector CANdb++ format, as read by cantools and SavvyCAN) and
-// reports every problem it finds as "file:line:col: message" in one CanError.
+// reports every problem it finds as "file:line:col: message" in one CanError. Like cantools it is
+// lenient by default: what cantools' strict=False lets pass (a reference to a message or signal that
+// does not exist, CANdb++'s placeholder message, an ENUM value that is not one of its values, an
+// attribute value outside its range, a signal beyond its message, a repeated signal or frame id)
+// becomes a warning naming the file, line and what was skipped; DbcMode::Strict refuses it.
 #include "emadiag/can/can_frame.hpp"
 
 #include <cstddef>
@@ -167,6 +171,9 @@ struct Message {
 
 struct Database {
     std::string version;
+    /// Lenient parsing only: "file:line:col: what; what was skipped or kept", in file order (at
+    /// most kDbcMaxReportedProblems, then one line saying how many more).
+    std::vector<std::string> warnings;
     std::vector<std::string> nodes;
     std::map<std::string, std::string> node_comments;
     std::vector<Message> messages;
@@ -189,8 +196,18 @@ inline constexpr std::size_t kDbcMaxSignalsPerMessage = 1024;
 inline constexpr std::size_t kDbcMaxSignals = 100'000;
 inline constexpr std::size_t kDbcMaxReportedProblems = 100;
 
-/// Parses DBC text; `file_name` is used in messages. Throws CanError listing every problem.
-[[nodiscard]] Database parse_dbc(std::string_view text, const std::string& file_name);
-[[nodiscard]] Database parse_dbc_file(const std::string& path);
+enum class DbcMode {
+    Lenient,  ///< as cantools strict=False: recoverable problems are warnings (Database::warnings)
+    Strict,   ///< every problem refuses the file
+};
+
+/// Parses DBC text; `file_name` is used in messages. Throws CanError listing every problem. In both
+/// modes a malformed statement, an out-of-range frame id or length, and multiplexing that cannot be
+/// evaluated (a signal multiplexed by itself, a cycle of multiplexors, a multiplexor not in the
+/// message) refuse the file. Signal and message long names (the SystemSignalLongSymbol and
+/// SystemMessageLongSymbol attributes CANdb++ writes, else ...LongName) replace the names cut to 32
+/// characters, as cantools does.
+[[nodiscard]] Database parse_dbc(std::string_view text, const std::string& file_name, DbcMode mode = DbcMode::Lenient);
+[[nodiscard]] Database parse_dbc_file(const std::string& path, DbcMode mode = DbcMode::Lenient);
 
 }  // namespace emadiag::can

@@ -18,6 +18,15 @@ namespace emadiag::can {
 [[nodiscard]] std::string_view ema_dbc_text();
 /// ema.dbc parsed once.
 [[nodiscard]] const Database& ema_database();
+/// What `db` lacks of the ICD the tool speaks: each message (by standard id and name) and signal
+/// (by name) that the codec below reads or writes, as "message EMA_Status (standard id 0x010)" or
+/// "signal EMA_TelemetryA.MotorCurrent"; empty when nothing is missing.
+[[nodiscard]] std::vector<std::string> missing_icd_items(const Database& db);
+/// Makes the DBC at `path` (an actuator's own ICD, `emadiag --dbc FILE`) the database of
+/// ema_database() and of every EmaIcd built afterwards; call it before the first. Throws CanError
+/// naming every missing message and signal, or the parser's problems; returns the parser's
+/// warnings (lenient mode).
+std::vector<std::string> use_ema_dbc_file(const std::string& path, DbcMode mode = DbcMode::Lenient);
 
 namespace icd {
 inline constexpr std::uint32_t kToolCommandId = 0x010;

@@ -2,6 +2,7 @@
 // The simulated EMA node (sim_backend/node/README.md).
 #include "emadiag/can/can_bus.hpp"
 #include "emadiag/can/ema_icd.hpp"
+#include "emadiag/node/node_clock.hpp"
 #include "emadiag/sim/simulator.hpp"
 
 #include <atomic>
@@ -72,8 +73,10 @@ struct HeartbeatGapStats {
 
 class EmaNode {
 public:
-    /// Validates the configuration (throws NodeError or SimError naming the bad field).
-    EmaNode(can::CanBus& bus, EmaNodeConfig config);
+    /// Validates the configuration (throws NodeError or SimError naming the bad field). `clock` is
+    /// read for every time the node keeps (steady_clock by default; tests pass a ManualNodeClock)
+    /// and must outlive the node.
+    EmaNode(can::CanBus& bus, EmaNodeConfig config, const NodeClock& clock = steady_node_clock());
 
     /// Serves the bus until `stop` becomes true.
     void run(const std::atomic<bool>& stop);
@@ -92,6 +95,7 @@ public:
 
 private:
     using Clock = std::chrono::steady_clock;
+    [[nodiscard]] Clock::time_point now() const { return clock_.now(); }
     void handle(const can::CanFrame& f, Clock::time_point now);
     void handle_command(const can::ToolCommand& c, Clock::time_point now);
     void start_sequence(const can::ToolCommand& c, Clock::time_point now);
@@ -108,6 +112,7 @@ private:
     void event(const std::string& what);
 
     can::CanBus& bus_;
+    const NodeClock& clock_;
     EmaNodeConfig config_;
     can::EmaIcd icd_;
     can::EmaStatus status_;
