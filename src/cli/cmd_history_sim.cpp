@@ -136,7 +136,7 @@ const bool registered = register_command(Command{
             std::vector<std::string> lines;  // printed once the history is committed
             std::cout << "emadiag history-sim: " << o->sessions << " " << o->phase << " sessions of " << o->tail << " every "
                       << num(o->days_between) << " days from " << o->start_utc << ", case " << o->load_case << ", noise " << o->noise
-                      << ", seed " << o->seed << "\n";
+                      << ", seed " << o->seed << "\n" << std::flush;
             const auto nothing_stored = [&](int session, const std::string& why) {
                 return EmadiagError("history-sim: " + why + " at session " + std::to_string(session) + " of " + std::to_string(o->sessions) +
                                     "; nothing was stored: a history is stored whole (one transaction) or not at all, and " + o->db +
