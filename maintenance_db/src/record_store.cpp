@@ -7,6 +7,7 @@
 #include "run_store_detail.hpp"
 
 #include <fcntl.h>
+#include <sqlite3.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -508,10 +509,42 @@ std::optional<SeriesStats> detail::find_series_stats(Database& db, const std::st
     return std::move(rows.front());
 }
 
-ChainCheck verify_tail(Database& db, const std::string& tail_number) {
+ChainCheck verify_tail(Database& db, const std::string& tail_number) { return verify_tail(db, tail_number, true); }
+
+ChainCheck verify_tail(Database& db, const std::string& tail_number, bool compare_anchor) {
     check_tail_number(tail_number);
     ChainCheck out;
     out.tail_number = tail_number;
+    // The anchor first, then the database in one read transaction: a store appends to the anchor
+    // after its commit, so every line read here is of a state the snapshot below includes (another
+    // process may commit in between: never a false "removed").
+    std::vector<AnchorLine> anchor;
+    std::size_t unreadable = 0;
+    const bool anchor_given = compare_anchor && !db.anchor_path().empty();
+    bool anchor_found = false;
+    if (anchor_given) {
+        std::ifstream in(db.anchor_path());
+        anchor_found = static_cast<bool>(in);
+        std::string text;
+        std::size_t line = 0;
+        while (anchor_found && std::getline(in, text)) {
+            ++line;
+            if (const auto a = parse_anchor_line(text, line)) {
+                if (a->tail == tail_number) anchor.push_back(*a);
+            } else {
+                ++unreadable;
+            }
+        }
+    }
+    const bool own_transaction = sqlite3_get_autocommit(db.handle()) != 0;
+    if (own_transaction) db.exec("BEGIN");
+    struct EndRead {
+        Database& db;
+        bool active;
+        ~EndRead() {
+            if (active) sqlite3_exec(db.handle(), "COMMIT", nullptr, nullptr, nullptr);  // a read: nothing to lose, never throws
+        }
+    } end_read{db, own_transaction};
     Statement of_tail(db, "SELECT session_id FROM test_sessions WHERE tail_number = ? ORDER BY session_id");
     of_tail.bind(1, tail_number);
     const std::vector<std::int64_t> ids = collect(of_tail, [](Columns& c) { return c.integer(); });
@@ -573,53 +606,40 @@ ChainCheck verify_tail(Database& db, const std::string& tail_number) {
     }
 
     // The anchor file: every line this database wrote for the tail must still be a prefix of its chains.
-    if (!db.anchor_path().empty()) {
-        std::ifstream in(db.anchor_path());
-        if (!in) {
-            out.notes.push_back("no anchor file " + db.anchor_path() + " to compare the chain heads with");
-        } else {
-            out.anchor_path = db.anchor_path();
-            const std::string station = station_uuid(db);
-            std::string text;
-            std::size_t line = 0, other_database = 0, unreadable = 0;
-            while (std::getline(in, text)) {
-                ++line;
-                const std::optional<AnchorLine> a = parse_anchor_line(text, line);
-                if (!a) {
-                    ++unreadable;
-                    continue;
-                }
-                if (a->tail != tail_number) continue;
-                if (a->station != station) {
-                    ++other_database;
-                    continue;
-                }
-                ++out.anchor_lines_checked;
-                const std::string at = "the anchor " + db.anchor_path() + " line " + std::to_string(line) + " (" + a->utc + ")";
-                if (a->sessions > static_cast<std::int64_t>(session_hashes.size())) {
-                    out.problems.push_back(at + " records " + std::to_string(a->sessions) + " sessions ending at " + a->head.substr(0, 16) +
-                                           "..., the database holds " + std::to_string(session_hashes.size()) +
-                                           ": sessions were removed outside the tool");
-                } else if (a->sessions > 0 && session_hashes[static_cast<std::size_t>(a->sessions - 1)] != a->head) {
-                    out.problems.push_back(at + " records session " + std::to_string(a->sessions) + " of the chain as " + a->head.substr(0, 16) +
-                                           "..., the database holds " + session_hashes[static_cast<std::size_t>(a->sessions - 1)].substr(0, 16) +
-                                           "...: the chain was rewritten outside the tool");
-                }
-                if (a->discovery_findings > static_cast<std::int64_t>(links.size())) {
-                    out.problems.push_back(at + " records " + std::to_string(a->discovery_findings) + " discovery findings, the database holds " +
-                                           std::to_string(links.size()) + ": discovery findings were removed outside the tool");
-                } else if (a->discovery_findings > 0 && links[static_cast<std::size_t>(a->discovery_findings - 1)] != a->discovery_head) {
-                    out.problems.push_back(at + " records discovery finding " + std::to_string(a->discovery_findings) + " of the chain as " +
-                                           a->discovery_head.substr(0, 16) + "..., the database's differs: rewritten outside the tool");
-                }
+    if (anchor_given && !anchor_found) out.notes.push_back("no anchor file " + db.anchor_path() + " to compare the chain heads with");
+    if (anchor_found) {
+        out.anchor_path = db.anchor_path();
+        const std::string station = station_uuid(db);
+        std::size_t other_database = 0;
+        for (const AnchorLine& a : anchor) {
+            if (a.station != station) {
+                ++other_database;
+                continue;
             }
-            if (other_database > 0)
-                out.notes.push_back(std::to_string(other_database) + " line(s) of " + db.anchor_path() + " for " + tail_number +
-                                    " name another database (station uuid) and were not compared");
-            if (unreadable > 0) out.notes.push_back(std::to_string(unreadable) + " line(s) of " + db.anchor_path() + " are not anchor lines");
-            if (out.anchor_lines_checked == 0 && (ids.size() > 0 || !links.empty()))
-                out.notes.push_back("the anchor " + db.anchor_path() + " holds no line of this database for " + tail_number);
+            ++out.anchor_lines_checked;
+            const std::string at = "the anchor " + db.anchor_path() + " line " + std::to_string(a.line) + " (" + a.utc + ")";
+            if (a.sessions > static_cast<std::int64_t>(session_hashes.size())) {
+                out.problems.push_back(at + " records " + std::to_string(a.sessions) + " sessions ending at " + a.head.substr(0, 16) +
+                                       "..., the database holds " + std::to_string(session_hashes.size()) + ": sessions were removed outside the tool");
+            } else if (a.sessions > 0 && session_hashes[static_cast<std::size_t>(a.sessions - 1)] != a.head) {
+                out.problems.push_back(at + " records session " + std::to_string(a.sessions) + " of the chain as " + a.head.substr(0, 16) +
+                                       "..., the database holds " + session_hashes[static_cast<std::size_t>(a.sessions - 1)].substr(0, 16) +
+                                       "...: the chain was rewritten outside the tool");
+            }
+            if (a.discovery_findings > static_cast<std::int64_t>(links.size())) {
+                out.problems.push_back(at + " records " + std::to_string(a.discovery_findings) + " discovery findings, the database holds " +
+                                       std::to_string(links.size()) + ": discovery findings were removed outside the tool");
+            } else if (a.discovery_findings > 0 && links[static_cast<std::size_t>(a.discovery_findings - 1)] != a.discovery_head) {
+                out.problems.push_back(at + " records discovery finding " + std::to_string(a.discovery_findings) + " of the chain as " +
+                                       a.discovery_head.substr(0, 16) + "..., the database's differs: rewritten outside the tool");
+            }
         }
+        if (other_database > 0)
+            out.notes.push_back(std::to_string(other_database) + " line(s) of " + db.anchor_path() + " for " + tail_number +
+                                " name another database (station uuid) and were not compared");
+        if (unreadable > 0) out.notes.push_back(std::to_string(unreadable) + " line(s) of " + db.anchor_path() + " are not anchor lines");
+        if (out.anchor_lines_checked == 0 && (!ids.empty() || !links.empty()))
+            out.notes.push_back("the anchor " + db.anchor_path() + " holds no line of this database for " + tail_number);
     }
     return out;
 }

@@ -92,6 +92,14 @@ public:
     /// "Anchoring the head"): DB.anchor beside the database by default, none ("") for ":memory:".
     [[nodiscard]] const std::string& anchor_path() const { return anchor_path_; }
     void set_anchor_path(std::string path) { anchor_path_ = std::move(path); }
+    /// The head of a tail's chain this connection has verified whole (verify_tail) or appended to
+    /// after such a check ("" none): a store through the same connection need not read the whole
+    /// record again while the chain head is still that one (a writer storing in a loop).
+    [[nodiscard]] std::string verified_head(const std::string& tail_number) const {
+        const auto it = verified_heads_.find(tail_number);
+        return it == verified_heads_.end() ? std::string() : it->second;
+    }
+    void set_verified_head(const std::string& tail_number, std::string head) { verified_heads_[tail_number] = std::move(head); }
     /// "message (path)" for the last error on this connection.
     [[nodiscard]] std::string error_text() const;
     /// A statement prepared once per connection and kept (for the bulk paths); reset and unbound
@@ -114,6 +122,7 @@ private:
     std::string anchor_path_;
     int busy_timeout_ms_ = kDefaultBusyTimeoutMs;
     std::unordered_map<std::string, std::unique_ptr<Statement>> cache_;
+    std::unordered_map<std::string, std::string> verified_heads_;
 };
 
 /// Begins a transaction; rolls back in the destructor unless commit() was called. Never throws

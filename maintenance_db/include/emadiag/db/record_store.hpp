@@ -114,7 +114,12 @@ struct ChainCheck {
 /// recomputed from them); and the anchor file db.anchor_path() (a deleted last session with a
 /// rewritten chain head shows there: docs/record-format.md, "Anchoring the head"). A change made
 /// outside the tool shows as a problem naming the session, finding or installation.
+/// Reads one consistent snapshot (a read transaction unless the caller has one open).
 [[nodiscard]] ChainCheck verify_tail(Database& db, const std::string& tail_number);
+/// As above; without the anchor file when compare_anchor is false (what a store checks before it
+/// appends: the database's own chain. A database restored from a backup is older than its anchor:
+/// verify says so, and stores go on).
+[[nodiscard]] ChainCheck verify_tail(Database& db, const std::string& tail_number, bool compare_anchor);
 
 /// The chain link of a discovery finding: SHA-256 over "emadiag-discovery-chain-v1\n", the previous
 /// link ("" for the first finding of the tail) and the finding's content_sha256.
