@@ -131,26 +131,35 @@ std::string discovery_sha256(const StoredDiscoveryFinding& f) {
     return h.hex();
 }
 
-/// A tail's discovery findings in finding_id order (the chain's order): id, found_utc and the row.
+/// The columns of a discovery finding with its position's ATA reference and description, as
+/// read_discovery_finding reads them (alias d, positions p joined).
+constexpr const char* kDiscoveryColumns =
+    "d.finding_id, d.tail_number, d.position, p.ata_reference, p.description, d.actuator_serial, d.found_utc, d.summary, d.model_json, "
+    "d.status, d.amends_finding_id, d.tool_version, d.content_sha256 FROM discovery_findings d LEFT JOIN positions p ON p.position = d.position";
+
+StoredDiscoveryFinding read_discovery_finding(Columns& c) {
+    StoredDiscoveryFinding f;
+    f.finding_id = c.integer();
+    f.tail_number = c.text();
+    f.position = c.optional_text();
+    f.position_ata = c.text();
+    f.position_description = c.text();
+    f.actuator_serial = c.text();
+    f.found_utc = c.text();
+    f.summary = c.text();
+    f.model_json = c.text();
+    f.status = c.text();
+    f.amends_finding_id = c.optional_integer();
+    f.tool_version = c.text();
+    f.content_sha256 = c.text();
+    return f;
+}
+
+/// A tail's discovery findings in finding_id order (the chain's order).
 std::vector<StoredDiscoveryFinding> discovery_chain_of(Database& db, const std::string& tail_number) {
-    Statement st(db, "SELECT finding_id, tail_number, position, actuator_serial, found_utc, summary, model_json, status, amends_finding_id, "
-                     "tool_version, content_sha256 FROM discovery_findings WHERE tail_number = ? ORDER BY finding_id");
+    Statement st(db, std::string("SELECT ") + kDiscoveryColumns + " WHERE d.tail_number = ? ORDER BY d.finding_id");
     st.bind(1, tail_number);
-    return collect(st, [](Columns& c) {
-        StoredDiscoveryFinding f;
-        f.finding_id = c.integer();
-        f.tail_number = c.text();
-        f.position = c.optional_text();
-        f.actuator_serial = c.text();
-        f.found_utc = c.text();
-        f.summary = c.text();
-        f.model_json = c.text();
-        f.status = c.text();
-        f.amends_finding_id = c.optional_integer();
-        f.tool_version = c.text();
-        f.content_sha256 = c.text();
-        return f;
-    });
+    return collect(st, read_discovery_finding);
 }
 
 /// The chain_heads row of a tail: sessions and their head, discovery findings and their head.
@@ -450,31 +459,13 @@ std::int64_t store_discovery_finding(Database& db, const StoredDiscoveryFinding&
 
 std::vector<StoredDiscoveryFinding> list_discovery_findings(Database& db, const std::string& tail_number, bool open_only) {
     check_tail_number(tail_number);
-    Statement st(db, std::string("SELECT d.finding_id, d.tail_number, d.position, p.ata_reference, p.description, d.actuator_serial, "
-                                 "d.found_utc, d.summary, d.model_json, d.status, d.amends_finding_id, d.tool_version, d.content_sha256 "
-                                 "FROM discovery_findings d LEFT JOIN positions p ON p.position = d.position WHERE d.tail_number = ?") +
+    Statement st(db, std::string("SELECT ") + kDiscoveryColumns + " WHERE d.tail_number = ?" +
                          (open_only ? " AND d.status = 'open' AND NOT EXISTS (SELECT 1 FROM discovery_findings a WHERE "
                                       "a.amends_finding_id = d.finding_id)"
                                     : "") +
                          " ORDER BY d.found_utc, d.finding_id");
     st.bind(1, tail_number);
-    return collect(st, [](Columns& c) {
-        StoredDiscoveryFinding f;
-        f.finding_id = c.integer();
-        f.tail_number = c.text();
-        f.position = c.optional_text();
-        f.position_ata = c.text();
-        f.position_description = c.text();
-        f.actuator_serial = c.text();
-        f.found_utc = c.text();
-        f.summary = c.text();
-        f.model_json = c.text();
-        f.status = c.text();
-        f.amends_finding_id = c.optional_integer();
-        f.tool_version = c.text();
-        f.content_sha256 = c.text();
-        return f;
-    });
+    return collect(st, read_discovery_finding);
 }
 
 std::vector<PositionStatus> list_position_status(Database& db) {
