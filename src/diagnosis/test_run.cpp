@@ -222,6 +222,7 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
                 stop = true;
                 try {
                     rec.outcome.run = read_run_candump(rec.log_path);
+                    rec.outcome.run.set_meta("log_file", (options.out_dir / log_name).string());
                     rec.outcome.run.set_meta("tail_number", options.tail_number);
                     rec.outcome.run.set_meta("phase", options.phase);
                     rec.outcome.run.set_meta("valid", "false");
@@ -237,6 +238,8 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
             }
             rec.outcome.run.set_meta("tail_number", options.tail_number);
             rec.outcome.run.set_meta("phase", options.phase);
+            // Where the raw log will be once the session is stored (it is recorded in the spool).
+            rec.outcome.run.set_meta("log_file", (options.out_dir / log_name).string());
             write_run_csv_file(rec.csv_path, rec.outcome.run);
             const auto& st = rec.outcome.stats;
             const auto& lp = rec.outcome.loop;

@@ -107,6 +107,14 @@ TEST_F(TestRun, HealthyEmaIsServiceableAndEverythingIsStoredUnderTheTail) {
     EXPECT_FALSE(s.runs[1].raw_log.empty());
     EXPECT_FALSE(s.runs[1].estimates.empty());
     EXPECT_EQ(s.runs[0].load_case, "A");
+    // Recorded inside the spool directory (recover takes no file from elsewhere), then moved to the
+    // output directory, which the stored run's log_file names.
+    for (const auto& run : s.runs) {
+        const std::string log_file = nlohmann::json::parse(run.meta_json).value("log_file", "");
+        EXPECT_EQ(std::filesystem::path(log_file).parent_path(), dir_ / "logs");
+        EXPECT_EQ(run.raw_log, slurp(log_file));
+    }
+    EXPECT_TRUE(std::filesystem::is_empty(spool_dir_for(o.db_path)));
 }
 
 TEST_F(TestRun, TheRecordKeepsPositionSerialCyclesAndThePersonAndNotesAnInstallationChange) {
