@@ -260,7 +260,16 @@ struct AnchorLine {
     std::size_t line = 0;
     std::string station, tail, head, discovery_head, utc;
     std::int64_t sessions = -1, discovery_findings = -1;
+    std::map<std::string, std::string> positions;  ///< position -> digest of its ATA reference and description
 };
+
+/// Every position's row as the anchor records it: position -> the first 32 hex digits of
+/// SHA-256(ata_reference "\n" description). The report shows both; a position keeps them for good.
+std::map<std::string, std::string> position_digests(Database& db) {
+    std::map<std::string, std::string> out;
+    for (const auto& p : list_positions(db)) out[p.position] = sha256_hex(p.ata_reference + "\n" + p.description).substr(0, 32);
+    return out;
+}
 constexpr std::string_view kAnchorTag = "emadiag-anchor-v1";
 
 std::optional<AnchorLine> parse_anchor_line(const std::string& text, std::size_t line) {
@@ -281,6 +290,14 @@ std::optional<AnchorLine> parse_anchor_line(const std::string& text, std::size_t
             else if (key == "discovery_findings") a.discovery_findings = std::stoll(value);
             else if (key == "discovery_head") a.discovery_head = value == "-" ? "" : value;
             else if (key == "utc") a.utc = value;
+            else if (key == "positions") {
+                std::istringstream list(value);
+                std::string item;
+                while (std::getline(list, item, ',')) {
+                    const auto slash = item.find('/');
+                    if (slash != std::string::npos) a.positions[item.substr(0, slash)] = item.substr(slash + 1);
+                }
+            }
         } catch (const std::exception&) {
             return std::nullopt;
         }
@@ -306,13 +323,16 @@ void detail::append_anchor(Database& db, const std::vector<std::string>& tails) 
     gmtime_r(&t, &tm);
     char utc[32];
     std::strftime(utc, sizeof utc, "%Y-%m-%dT%H:%M:%SZ", &tm);
+    std::string positions;
+    for (const auto& [name, digest] : position_digests(db)) positions += (positions.empty() ? "" : ",") + name + "/" + digest;
     std::string text;
     for (const auto& tail : tails) {
         const std::optional<HeadRow> h = head_row(db, tail);
         if (!h) continue;
         text += std::string(kAnchorTag) + " station=" + station + " tail=" + tail + " sessions=" + std::to_string(h->sessions) +
                 " head=" + (h->content_sha256.empty() ? "-" : h->content_sha256) + " discovery_findings=" + std::to_string(h->discovery_findings) +
-                " discovery_head=" + (h->discovery_head_sha256.empty() ? "-" : h->discovery_head_sha256) + " utc=" + utc + "\n";
+                " discovery_head=" + (h->discovery_head_sha256.empty() ? "-" : h->discovery_head_sha256) +
+                (positions.empty() ? "" : " positions=" + positions) + " utc=" + utc + "\n";
     }
     if (text.empty()) return;
     const auto fail = [&](int err) {
@@ -601,6 +621,8 @@ ChainCheck verify_tail(Database& db, const std::string& tail_number, bool compar
     if (anchor_found) {
         out.anchor_path = db.anchor_path();
         const std::string station = station_uuid(db);
+        const std::map<std::string, std::string> positions_now = position_digests(db);
+        std::map<std::string, std::string> position_problems;  // one problem per position, however many lines show it
         std::size_t other_database = 0;
         for (const AnchorLine& a : anchor) {
             if (a.station != station) {
@@ -609,6 +631,13 @@ ChainCheck verify_tail(Database& db, const std::string& tail_number, bool compar
             }
             ++out.anchor_lines_checked;
             const std::string at = "the anchor " + db.anchor_path() + " line " + std::to_string(a.line) + " (" + a.utc + ")";
+            for (const auto& [position, digest] : a.positions) {
+                const auto now = positions_now.find(position);
+                if (now == positions_now.end())
+                    position_problems.emplace(position, at + " records position " + position + ", which the positions table no longer holds: removed outside the tool");
+                else if (now->second != digest)
+                    position_problems.emplace(position, at + " records position " + position + " with another ATA reference or description than the positions table holds now: changed outside the tool");
+            }
             if (a.sessions > static_cast<std::int64_t>(session_hashes.size())) {
                 out.problems.push_back(at + " records " + std::to_string(a.sessions) + " sessions ending at " + a.head.substr(0, 16) +
                                        "..., the database holds " + std::to_string(session_hashes.size()) + ": sessions were removed outside the tool");
@@ -625,6 +654,7 @@ ChainCheck verify_tail(Database& db, const std::string& tail_number, bool compar
                                        a.discovery_head.substr(0, 16) + "..., the database's differs: rewritten outside the tool");
             }
         }
+        for (const auto& [position, problem] : position_problems) out.problems.push_back(problem);
         if (other_database > 0)
             out.notes.push_back(std::to_string(other_database) + " line(s) of " + db.anchor_path() + " for " + tail_number +
                                 " name another database (station uuid) and were not compared");

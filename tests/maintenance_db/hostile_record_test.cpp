@@ -99,6 +99,21 @@ TEST(HostileRecord, AnInstallationEditedOutsideTheToolFailsVerify) {
                                                  HasSubstr("changed outside the tool")));
 }
 
+TEST(HostileRecord, APositionsAtaReferenceOrDescriptionEditedOutsideTheToolFailsVerifyThroughTheAnchor) {
+    for (const std::string edit : {"ata_reference = '27-10'", "description = 'right aileron'"}) {
+        const TempDbFile file;
+        fill(file.path());
+        {
+            RawConnection raw(file.path());
+            raw.exec("UPDATE positions SET " + edit + " WHERE position = 'LH-ELEV'");
+        }
+        Database db(file.path());
+        EXPECT_THAT(problems_of(db, "F-WEMA"),
+                    HasSubstr("records position LH-ELEV with another ATA reference or description than the positions table holds now"))
+            << edit;
+    }
+}
+
 TEST(HostileRecord, ADeletedInstallationFailsVerify) {
     const TempDbFile file;
     fill(file.path());
