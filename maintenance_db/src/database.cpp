@@ -23,6 +23,8 @@ constexpr int kSealVersion = 3;
 /// The schema version that rebuilds test_sessions and findings clustered by tail: the migration
 /// code checks that both keep every row.
 constexpr int kClusterVersion = 6;
+/// The schema version that chains the discovery findings: the migration code chains those stored before.
+constexpr int kDiscoveryChainVersion = 7;
 /// The tables a store updates in place (upserts) and the small ones it reads before writing: the
 /// bounded check at open reads them whole (IntegrityScope::Open).
 constexpr const char* kTablesUpdatedInPlace[] = {"aircraft", "positions", "chain_heads", "series_stats", "position_status"};
@@ -68,6 +70,7 @@ void throw_sqlite_error(Database& db, int rc, const std::string& what) {
 
 Database::Database(const std::string& path, int busy_timeout_ms, bool quick_check) : path_(path), busy_timeout_ms_(busy_timeout_ms) {
     const bool in_memory = path == ":memory:" || path.empty();
+    if (!in_memory) anchor_path_ = path + ".anchor";
     if (!in_memory) {
         // A URI (postgresql://..., any scheme://) is no file name: refused before anything is created,
         // and never repeated with its password.
@@ -165,7 +168,7 @@ void Database::check_before_write() {
         std::string list;
         for (const auto& p : problems) list += (list.empty() ? "" : "; ") + p;
         throw DbError("database " + path_ + " is corrupt or truncated and was not opened (nothing was written to it; " +
-                          (scope == IntegrityScope::Full ? "PRAGMA quick_check" : "check at open") + ": " + list +
+                          (scope == IntegrityScope::Full ? "PRAGMA quick_check and the file size" : "check at open") + ": " + list +
                           "); it is left untouched: restore it from a backup",
                       DbErrorKind::Corrupt);
     }
@@ -214,10 +217,22 @@ std::vector<std::string> Database::integrity_problems(IntegrityScope scope, int 
             throw DbError(sql + ": " + (cause_of(kind, busy_timeout_ms_).empty() ? "" : cause_of(kind, busy_timeout_ms_) + ": ") + err, kind);
         }
     }
-    if (scope == IntegrityScope::Open && path_ != ":memory:" && !path_.empty()) {
-        // After the reads above (which roll back a hot journal left by a crash, restoring the header):
-        // the header (sqlite.org/fileformat.html 1.3): page size at 16, change counter at 24, page
-        // count at 28, valid when the version-valid-for number at 92 equals the change counter.
+    if (path_ != ":memory:" && !path_.empty()) {
+        if (const auto p = file_size_problem()) add(*p);
+    }
+    return problems;
+}
+
+std::optional<std::string> Database::file_size_problem() {
+    // Under a shared lock (a read transaction): no writer is half-way through growing the file, and
+    // the first read has rolled back a hot journal left by a crash (restoring the header). The
+    // header (sqlite.org/fileformat.html 1.3): page size at 16, change counter at 24, page count at
+    // 28, valid when the version-valid-for number at 92 equals the change counter.
+    const bool own_transaction = sqlite3_get_autocommit(db_) != 0;
+    if (own_transaction) exec("BEGIN");
+    std::optional<std::string> problem;
+    try {
+        Statement(*this, "SELECT count(*) FROM sqlite_schema").step();
         std::ifstream in(path_, std::ios::binary);
         std::string head(100, '\0');
         in.read(head.data(), static_cast<std::streamsize>(head.size()));
@@ -227,14 +242,27 @@ std::vector<std::string> Database::integrity_problems(IntegrityScope scope, int 
             std::uint64_t page_size = big_endian(head, 16, 2);
             if (page_size == 1) page_size = 65536;
             const std::uint64_t pages = big_endian(head, 28, 4);
-            const bool valid = big_endian(head, 24, 4) == big_endian(head, 92, 4);
-            if (page_size < 512 || (page_size & (page_size - 1)) != 0) add("page size " + std::to_string(page_size) + " in the header is not valid");
-            else if (valid && pages * page_size > bytes)
-                add("the header records " + std::to_string(pages) + " pages of " + std::to_string(page_size) + " bytes, the file holds " +
-                    std::to_string(bytes) + " bytes: truncated");
+            const bool valid = big_endian(head, 24, 4) == big_endian(head, 92, 4) && pages > 0;
+            if (page_size < 512 || (page_size & (page_size - 1)) != 0) {
+                problem = "page size " + std::to_string(page_size) + " in the header is not valid";
+            } else if (valid && pages * page_size > bytes) {
+                problem = "the header records " + std::to_string(pages) + " pages of " + std::to_string(page_size) + " bytes, the file holds " +
+                          std::to_string(bytes) + " bytes: truncated";
+            } else if (valid && bytes > pages * page_size) {
+                problem = "the header records " + std::to_string(pages) + " pages of " + std::to_string(page_size) + " bytes (" +
+                          std::to_string(pages * page_size) + " bytes), the file holds " + std::to_string(bytes) + ": " +
+                          std::to_string(bytes - pages * page_size) + " bytes after the last page were not written by SQLite";
+            } else if (bytes % page_size != 0) {
+                problem = "the file holds " + std::to_string(bytes) + " bytes, not a whole number of " + std::to_string(page_size) +
+                          "-byte pages: " + std::to_string(bytes % page_size) + " bytes after the last page were not written by SQLite";
+            }
         }
+    } catch (...) {
+        if (own_transaction) sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+        throw;
     }
-    return problems;
+    if (own_transaction) exec("COMMIT");
+    return problem;
 }
 
 void Database::exec(std::string_view sql) {
@@ -269,8 +297,17 @@ void Database::migrate() {
     // Every pending step in one transaction: the file moves from the version it had to the newest
     // or not at all. A new file is never seen half-made (a kill -9 after step 1's commit once left
     // a version-1 file with no test_sessions table), and an old one never stops at a middle version.
+    // BEGIN IMMEDIATE takes the write lock (waiting the busy timeout for another process that is
+    // creating or migrating the same file), and the version is read again under that lock: the
+    // other process may have done the work meanwhile (four importers creating one new file raced
+    // here: "table aircraft already exists").
     Transaction tx(*this);
-    for (int v = have; v < newest; ++v) {
+    const int locked_have = schema_version();
+    if (locked_have > newest) {
+        throw DbError("database " + path_ + " has schema version " + std::to_string(locked_have) +
+                      ", newer than this emadiag understands (" + std::to_string(newest) + ")");
+    }
+    for (int v = locked_have; v < newest; ++v) {
         const auto count_rows = [this](const char* table) {
             Statement st(*this, std::string("SELECT count(*) FROM ") + table);
             st.step();
@@ -283,6 +320,7 @@ void Database::migrate() {
         }
         exec(kSchemaMigrations[v]);
         if (v + 1 == kSealVersion) detail::seal_sessions_before_v3(*this);
+        if (v + 1 == kDiscoveryChainVersion) detail::seal_discovery_findings_before_v7(*this);
         if (v + 1 == kClusterVersion) {
             const std::int64_t sessions_after = count_rows("test_sessions"), findings_after = count_rows("findings");
             if (sessions_after != sessions_before || findings_after != findings_before)

@@ -5,6 +5,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace emadiag::db::detail {
 
@@ -24,6 +25,15 @@ inline constexpr const char* kSeriesStatsColumns =
 
 /// The position_status row of a tail and position, if stored (a statement cached on the connection).
 [[nodiscard]] std::optional<PositionStatus> find_position_status(Database& db, const std::string& tail_number, const std::string& position);
+
+/// Schema version 7: chains each tail's discovery findings stored before it (finding_id order) and
+/// records the head and count in chain_heads (docs/record-format.md, "Discovery findings").
+void seal_discovery_findings_before_v7(Database& db);
+
+/// After a committed store: appends one line per tail (its session count and head, its discovery
+/// findings' count and head) to db.anchor_path(), fsynced. Nothing when the path is empty. Throws
+/// DbError naming the file when it cannot be written (the store itself is committed).
+void append_anchor(Database& db, const std::vector<std::string>& tails);
 
 /// Maps a failed SQLite call to a DbError of the right kind, naming the database and the cause.
 [[noreturn]] void throw_sqlite_error(Database& db, int rc, const std::string& what);

@@ -27,5 +27,6 @@ std::vector<StoredDiscoveryFinding> SqliteRecordSource::discovery_findings(const
 std::vector<StoredPosition> SqliteRecordSource::positions() { return list_positions(db_); }
 std::vector<SeriesStats> SqliteRecordSource::series_stats() { return list_series_stats(db_); }
 std::vector<PositionStatus> SqliteRecordSource::position_status() { return list_position_status(db_); }
+std::vector<std::string> SqliteRecordSource::record_problems(const std::string& t) { return verify_tail(db_, t).problems; }
 
 }  // namespace emadiag::db

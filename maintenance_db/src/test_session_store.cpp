@@ -473,6 +473,8 @@ struct Batch {
     std::string limits_json, limits_sha256;
     /// The id the next stored session gets (0: not read yet in this transaction).
     std::int64_t next_session_id = 0;
+    /// Check each tail's chain head before appending to it (off only while the migration seals).
+    bool check_heads = true;
     /// The insert statements, fetched from the connection's cache once per transaction.
     Statement *insert_aircraft = nullptr, *insert_session = nullptr, *insert_finding = nullptr, *insert_artifact = nullptr;
 };
@@ -595,13 +597,54 @@ void add_to_summaries(Database& db, Batch& b, const StoredTestSession& s, std::i
     }
 }
 
+StoredTestSession load_session(Database& db, std::int64_t session_id, FindingsLayout layout);
+
+/// Throws DbError (kind BrokenChain) naming the tail and the session when the tail's chain head is
+/// not what the tool left: the session it names is missing, of another tail, has another hash, or
+/// no longer hashes to its stored value (its content was changed or damaged). One session's reads:
+/// the bulk store checks this for every tail it appends to; a single store verifies the whole chain
+/// first (verify_tail).
+void check_chain_head(Database& db, const std::string& tail, const std::optional<std::pair<std::int64_t, std::string>>& head) {
+    const auto broken = [&](const std::string& what) {
+        throw DbError("tail " + tail + ": its hash chain is broken: " + what + "; nothing was stored (`emadiag verify --tail " + tail +
+                          "` lists every problem; restore the database from a backup)",
+                      DbErrorKind::BrokenChain);
+    };
+    if (!head || head->second.empty()) {
+        Statement& any = db.cached("SELECT session_id FROM test_sessions WHERE tail_number = ? LIMIT 1");
+        any.bind(1, tail);
+        const bool has = any.step();
+        const std::int64_t id = has ? any.column_int(0) : 0;
+        any.reset();
+        if (has) broken("it has sessions (e.g. session " + std::to_string(id) + ") but its chain head records none");
+        return;
+    }
+    Statement& st = db.cached("SELECT tail_number, content_sha256 FROM test_sessions WHERE session_id = ?");
+    st.bind(1, head->first);
+    const bool found = st.step();
+    const std::string of_tail = found ? st.column_text(0) : "", sha = found ? st.column_text(1) : "";
+    st.reset();
+    const std::string id = std::to_string(head->first);
+    if (!found) broken("its chain head names session " + id + ", which is not in the database (removed outside the tool)");
+    if (of_tail != tail) broken("its chain head names session " + id + ", which is a session of tail " + of_tail);
+    if (sha != head->second)
+        broken("session " + id + " (its newest) has hash " + sha.substr(0, 16) + "..., its chain head records " + head->second.substr(0, 16) + "...");
+    const StoredTestSession s = load_session(db, head->first, FindingsLayout::ByTail);
+    if (session_content_sha256(s, s.prev_sha256) != s.content_sha256)
+        broken("session " + id + " (" + s.started_utc + "): its content differs from its stored hash (changed or damaged outside the tool)");
+}
+
 std::string chain_head(Database& db, Batch& b, const std::string& tail) {
     if (const auto it = b.heads.find(tail); it != b.heads.end()) return it->second.sha;
     if (const auto it = b.head_before.find(tail); it != b.head_before.end()) return it->second;
-    Statement& st = db.cached("SELECT content_sha256 FROM chain_heads WHERE tail_number = ?");
+    Statement& st = db.cached("SELECT session_id, content_sha256 FROM chain_heads WHERE tail_number = ?");
     st.bind(1, tail);
-    std::string head = st.step() ? st.column_text(0) : "";
+    std::optional<std::pair<std::int64_t, std::string>> row;
+    if (st.step()) row.emplace(st.column_int(0), st.column_text(1));
     st.reset();
+    // The sealing of the version-3 migration builds the chain from nothing: no head to check.
+    if (b.check_heads) check_chain_head(db, tail, row);
+    const std::string head = row ? row->second : "";
     b.head_before[tail] = head;
     return head;
 }
@@ -938,13 +981,82 @@ SessionReceipt insert_session(Database& db, Batch& b, const StoredTestSession& s
 }
 }  // namespace
 
-SessionReceipt store_session(Database& db, const StoredTestSession& session) {
-    check_session(session);
-    Transaction tx(db);
+namespace {
+/// The tails a batch appended to (for the anchor file), before flush() clears the batch.
+std::vector<std::string> tails_of(const Batch& b) {
+    std::vector<std::string> tails;
+    for (const auto& [tail, head] : b.heads) tails.push_back(tail);
+    std::sort(tails.begin(), tails.end());
+    return tails;
+}
+
+/// Throws DbError (kind BrokenChain) unless the tail's whole record verifies (verify_tail): a store
+/// never appends to a broken chain. The message names the tail and the first problem.
+void require_intact(Database& db, const std::string& tail) {
+    {
+        // Verified whole by this connection, and nobody has appended since: the head check inside
+        // the transaction (check_chain_head) is enough.
+        Statement& head = db.cached("SELECT content_sha256 FROM chain_heads WHERE tail_number = ?");
+        head.bind(1, tail);
+        const std::string now = head.step() ? head.column_text(0) : "";
+        head.reset();
+        if (!now.empty() && db.verified_head(tail) == now) return;
+    }
+    const ChainCheck c = verify_tail(db, tail, /*compare_anchor=*/false);
+    if (c.ok()) {
+        db.set_verified_head(tail, c.head_sha256);
+        return;
+    }
+    throw DbError("tail " + tail + ": its record was changed outside the tool (" + std::to_string(c.problems.size()) +
+                      " problem(s); the first: " + c.problems.front() + "); nothing was stored: nothing is appended to a broken chain (`emadiag verify --tail " +
+                      tail + "` lists every problem; restore the database from a backup)",
+                  DbErrorKind::BrokenChain);
+}
+}  // namespace
+
+struct SessionBatch::State {
+    explicit State(Database& d) : db(d) {}
+    Database& db;
+    std::optional<Transaction> tx;
     Batch b;
-    SessionReceipt receipt = insert_session(db, b, session);
-    flush(db, b);
-    tx.commit();
+    std::map<std::string, bool> verified;  ///< tails whose whole record was verified in this batch
+    bool committed = false;
+};
+
+SessionBatch::SessionBatch(Database& db) : state_(std::make_unique<State>(db)) {}
+SessionBatch::~SessionBatch() = default;  // an open transaction rolls back (Transaction's destructor)
+
+SessionReceipt SessionBatch::add(const StoredTestSession& session) {
+    State& st = *state_;
+    if (st.committed) throw DbError("session batch on " + st.db.path() + " already committed", DbErrorKind::Invalid);
+    check_session(session);
+    if (st.verified.emplace(session.tail_number, true).second) {
+        // The first tail is verified before the write lock is taken (reading a long record must not
+        // hold other writers off); a later one inside the transaction.
+        require_intact(st.db, session.tail_number);
+    }
+    if (!st.tx) st.tx.emplace(st.db);
+    return insert_session(st.db, st.b, session);
+}
+
+void SessionBatch::commit() {
+    State& st = *state_;
+    if (st.committed) throw DbError("session batch on " + st.db.path() + " already committed", DbErrorKind::Invalid);
+    st.committed = true;
+    if (!st.tx) return;  // nothing added
+    const std::vector<std::string> tails = tails_of(st.b);
+    std::vector<std::pair<std::string, std::string>> heads;  // each verified tail's new head
+    for (const auto& [tail, h] : st.b.heads) heads.emplace_back(tail, h.sha);
+    flush(st.db, st.b);
+    st.tx->commit();
+    for (auto& [tail, sha] : heads) st.db.set_verified_head(tail, std::move(sha));
+    detail::append_anchor(st.db, tails);
+}
+
+SessionReceipt store_session(Database& db, const StoredTestSession& session) {
+    SessionBatch batch(db);
+    SessionReceipt receipt = batch.add(session);
+    batch.commit();
     return receipt;
 }
 
@@ -960,10 +1072,12 @@ std::vector<SessionReceipt> store_sessions(Database& db, const std::vector<Store
     std::vector<SessionReceipt> out;
     out.reserve(sessions.size());
     Transaction tx(db);
-    Batch b;
+    Batch b;  // checks each tail's chain head (one session's reads per tail) before appending to it
     for (const auto& s : sessions) out.push_back(insert_session(db, b, s));
+    const std::vector<std::string> tails = tails_of(b);
     flush(db, b);
     tx.commit();
+    detail::append_anchor(db, tails);
     return out;
 }
 
@@ -1010,6 +1124,7 @@ void detail::seal_sessions_before_v3(Database& db) {
         while (st.step()) ids.push_back(st.column_int(0));
     }
     Batch b;
+    b.check_heads = false;
     for (const auto id : ids) {
         StoredTestSession s = load_session(db, id, FindingsLayout::BySession);  // the version-3 layout
         s.limits_sha256 = sha256_hex(s.limits_json);

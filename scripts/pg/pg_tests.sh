@@ -35,11 +35,29 @@ sim --db a.db --tail N2EM --position RH-ELEV --sessions 5 --days-between 20 --fs
 sim --db b.db --tail N1EM --position RH-ELEV --sessions 6 --cycles-per-day 4 --seed 7
 sim --db c.db --tail N3EM --position LH-AIL --sessions 60 --days-between 5 --seed 3
 # Discovery findings of N1EM (as `emadiag discover --tail` stores them): one open, one closed by a later entry.
-sqlite3 a.db "INSERT INTO discovery_findings(tail_number, position, actuator_serial, found_utc, summary, model_json, status, tool_version, content_sha256)
-  VALUES ('N1EM', 'LH-ELEV', 'NEW-1', '2026-09-01T10:00:00Z', 'Stribeck term: +0.012 N m below 0.5 rad/s; RMS error 0.031 -> 0.012 A', '{}', 'open', 'test', lower(hex(randomblob(32)))),
-         ('N1EM', 'LH-ELEV', 'NEW-1', '2026-09-02T10:00:00Z', 'backlash 0.4 mrad', '{}', 'open', 'test', lower(hex(randomblob(32))));
-  INSERT INTO discovery_findings(tail_number, position, actuator_serial, found_utc, summary, model_json, status, amends_finding_id, tool_version, content_sha256)
-  VALUES ('N1EM', 'LH-ELEV', 'NEW-1', '2026-09-03T10:00:00Z', 'backlash 0.4 mrad: closed, shim replaced', '{}', 'closed', 2, 'test', lower(hex(randomblob(32))))"
+# Each with its content hash and the tail's chain of findings (docs/record-format.md), so that the
+# station's record verifies (a report of a changed record says so and exits 5).
+dlink=""
+dcount=0
+disc() {  # disc UTC SUMMARY STATUS AMENDS(- for none)
+  local f content sha amends_sql
+  content="emadiag-discovery-v1"$'\n'
+  for f in "tail_number=N1EM" "position=LH-ELEV" "actuator_serial=NEW-1" "found_utc=$1" "summary=$2" "model_json={}" "status=$3" \
+           "amends_finding_id=$4" "tool_version=test"; do
+    content+="${f%%=*}:$(printf '%s' "${f#*=}" | wc -c):${f#*=}"$'\n'
+  done
+  sha=$(printf '%s' "$content" | sha256sum | cut -c1-64)
+  dlink=$(printf 'emadiag-discovery-chain-v1\n%s\n%s\n' "$dlink" "$sha" | sha256sum | cut -c1-64)
+  dcount=$((dcount + 1))
+  amends_sql=$([ "$4" = - ] && echo NULL || echo "$4")
+  sqlite3 a.db "INSERT INTO discovery_findings(tail_number, position, actuator_serial, found_utc, summary, model_json, status, amends_finding_id, tool_version, content_sha256)
+    VALUES ('N1EM', 'LH-ELEV', 'NEW-1', '$1', '$2', '{}', '$3', $amends_sql, 'test', '$sha');
+    UPDATE chain_heads SET discovery_findings = $dcount, discovery_head_sha256 = '$dlink' WHERE tail_number = 'N1EM'"
+}
+disc 2026-09-01T10:00:00Z 'Stribeck term: +0.012 N m below 0.5 rad/s; RMS error 0.031 -> 0.012 A' open -
+disc 2026-09-02T10:00:00Z 'backlash 0.4 mrad' open -
+disc 2026-09-03T10:00:00Z 'backlash 0.4 mrad: closed, shim replaced' closed 2
+"$E" verify --db a.db --tail N1EM > verify_a.txt 2>&1 || { echo "FAIL: the station file does not verify:"; cat verify_a.txt; exit 1; }
 count() { sqlite3 "$1" "SELECT count(*) FROM test_sessions"; }
 
 # ---- 1. a password in the URI is refused and never printed ----
@@ -205,7 +223,20 @@ same() {  # label, then the command's arguments after --db
   local cmd="$1"; shift
   local lite pgout
   local file="${LITE:-a.db}"
-  lite="$("$E" "$cmd" --db "$file" "$@" 2>&1)" || { fail "$label from SQLite: $lite"; return; }
+  if [ -n "${CHANGED:-}" ]; then
+    # The station file was changed outside the tool (CHANGED=1): its report says so (exit 5, a first
+    # line "# RECORD CHANGED ..." in text, a last key "record_integrity" in JSON); the rest is compared.
+    lite="$("$E" "$cmd" --db "$file" "$@" 2>/dev/null)"; local rc=$?
+    [ $rc -eq 5 ] || { fail "$label from SQLite: exit $rc, not 5 (the record was changed outside the tool): $lite"; return; }
+    lite="$(python3 -c 'import sys
+t = sys.stdin.read()
+if t.startswith("# RECORD CHANGED"): t = t.split("\n", 1)[1]
+k = t.find(",\n  \"record_integrity\": ")
+if k >= 0: t = t[:k] + "\n}\n"
+sys.stdout.write(t)' <<< "$lite")"
+  else
+    lite="$("$E" "$cmd" --db "$file" "$@" 2>&1)" || { fail "$label from SQLite: $lite"; return; }
+  fi
   pgout="$("$E" "$cmd" --db "$U" "$@" 2>&1)" || { fail "$label from PostgreSQL: $pgout"; return; }
   lite="${lite//"$file"/"$U"}"  # the one difference: the database is named as given
   if [ "$lite" = "$pgout" ]; then pass "$label: byte for byte the same ($(wc -c <<< "$pgout") bytes)"
@@ -262,7 +293,7 @@ rows=$(DB=fleet3 admin -c "SELECT count(*) FROM session_findings p JOIN test_ses
 [ -z "$out" ] && [ "$rows" = 2 ] && pass "a finding added later to session $late: accepted, 2 packed rows for the session" ||
   fail "a finding added later: '$out', $rows packed rows"
 U="$(uri fleet3 station_a)"
-for fmt in text json; do LITE=d.db same "report N4EM --format $fmt, a finding added later to session $late" report --tail N4EM --format "$fmt" --draws 500; done
+for fmt in text json; do LITE=d.db CHANGED=1 same "report N4EM --format $fmt, a finding added later to session $late" report --tail N4EM --format "$fmt" --draws 500; done
 
 # ---- 7. a fleet server at every earlier schema version, with sessions, migrated to the newest ----
 S="$here/../../maintenance_db/pg_schema"

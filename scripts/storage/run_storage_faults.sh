@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Storage faults with the real command (issue 12 part 3; table in tests/README.md "Storage faults"):
 #   1. `emadiag history-sim` killed with SIGKILL at a random point, N times (default 50), on one
-#      database; after each kill PRAGMA integrity_check is ok and every session is whole;
+#      database; after each kill PRAGMA integrity_check is ok, every session is whole and every
+#      history (one transaction) holds all of its sessions or none;
 #   2. `emadiag import` of a run killed the same way, N times; every session is whole (its run,
 #      samples, raw log and findings) and the next import still stores;
 #   3. a full disk: history-sim into a database on a 2 MB tmpfs (needs mount, i.e. root); it must
-#      stop with "database or disk is full", leaving the sessions stored before it whole.
+#      stop with "database or disk is full", storing nothing of the history.
 # The unit test maintenance_db_storage_fault_test covers the same with the library (fork + SIGKILL),
 # two writers at once, an I/O error at every write and a full disk through a VFS shim, a corrupt,
 # truncated or read-only file.
@@ -45,22 +46,35 @@ check_db() {
 }
 
 echo "== kill -9 of emadiag history-sim at random points, $kills times =="
+# One history is one transaction: after each kill its tail holds all of its sessions or none. Each
+# kill is a history of its own tail (H1, H2, ...); the kill time is drawn uniformly over 1.2 times
+# one whole history, so some kills land after the commit (whole) and most before (absent).
 db=$work/kill.db
-before=0
+hist=4
+t0=$(date +%s%N)
+"$emadiag" history-sim --db "$work/history_time.db" --tail N123EM --sessions "$hist" --noise none --seed 1 >/dev/null
+span_ms=$(( ($(date +%s%N) - t0) * 12 / 10000000 + 1 ))
 hot=0
+whole=0
+absent=0
 for i in $(seq 1 "$kills"); do
-  "$emadiag" history-sim --db "$db" --tail N123EM --sessions 1000 --noise none --seed "$i" >/dev/null 2>&1 &
+  "$emadiag" history-sim --db "$db" --tail "H$i" --sessions "$hist" --noise none --seed "$i" >/dev/null 2>&1 &
   pid=$!
-  sleep "0.$(printf '%03d' $((RANDOM % 900 + 50)))"
+  sleep "$(awk -v ms=$((RANDOM % span_ms)) 'BEGIN { printf "%.3f", ms / 1000 }')"
   kill -9 "$pid" 2>/dev/null || true
   wait "$pid" 2>/dev/null || true
   [ -s "$db-journal" ] && hot=$((hot + 1))
   # The library's open (quick_check) must accept it too; sqlite3 rolls a hot journal back first.
-  n=$(check_db "$db" 2) || { echo "kill $i: database damaged" >&2; exit 1; }
-  [ "$n" -ge "$before" ] || { echo "kill $i: sessions went from $before to $n" >&2; exit 1; }
-  before=$n
+  check_db "$db" 2 >/dev/null || { echo "kill $i: database damaged" >&2; exit 1; }
+  [ -s "$db" ] && [ "$(sqlite3 "$db" "SELECT COUNT(*) FROM sqlite_master")" != 0 ] || { absent=$((absent + 1)); continue; }
+  # Every history so far: all of its sessions or none (a partial history is a failure).
+  partial=$(sqlite3 "$db" "SELECT tail_number || ': ' || COUNT(*) FROM test_sessions GROUP BY tail_number HAVING COUNT(*) != $hist")
+  [ -z "$partial" ] || { echo "kill $i: partial histories (sessions of $hist): $partial" >&2; exit 1; }
+  n=$(sqlite3 "$db" "SELECT COUNT(*) FROM test_sessions WHERE tail_number = 'H$i'")
+  if [ "$n" = "$hist" ]; then whole=$((whole + 1)); else absent=$((absent + 1)); fi
 done
-echo "kill -9: $kills kills, $hot interrupted a transaction (hot journal), $before whole sessions, integrity ok, no partial session"
+n=$(check_db "$db" 2)
+echo "kill -9 history-sim: $kills kills over ${span_ms} ms, $whole histories whole, $absent absent, none partial; $hot interrupted a transaction (hot journal); $n whole sessions, integrity ok"
 
 echo "== kill -9 of emadiag import at random points, $kills times =="
 run=$work/import_run.csv

@@ -5,11 +5,13 @@
 // session is the technician's ground routine (DYN then BRK) simulated directly, with FDJ and FSJ
 // drifting linearly in time; each run is estimated by both methods (estimate_run), the verdict is
 // formed against the section-8 envelope (assess) and the session is stored like `emadiag test-run`
-// stores it (runs with samples and their CSV as raw log, estimates, findings), one transaction per
-// session. Runs have source "history-sim"; their meta_json carries the true parameters
+// stores it (runs with samples and their CSV as raw log, estimates, findings). The whole history is
+// ONE transaction (db::SessionBatch): a session that fails, Ctrl-C, SIGTERM or kill -9 leave the
+// database as it was before the command, never a partial history. Runs have source "history-sim"; their meta_json carries the true parameters
 // (true_FDJ_Nm, true_FSJ_Nm, ...). Deterministic for a seed.
 #include "cli/command.hpp"
 #include "cli/db_source.hpp"
+#include "cli/interrupt.hpp"
 #include "cli/record_options.hpp"
 #include "diagnosis/session_storage.hpp"
 
@@ -130,10 +132,21 @@ const bool registered = register_command(Command{
             const sim::NoiseProfile noise = sim::parse_noise(o->noise);
             const HealthLimits limits = HealthLimits::datasheet_envelope();
             db::Database database(o->db);
+            // Ctrl-C and SIGTERM only set a flag, seen between sessions: the transaction is rolled
+            // back and the command says so (kill -9 leaves a hot journal SQLite rolls back).
+            const std::atomic<bool>& interrupted = install_interrupt_handler();
+            db::SessionBatch batch(database);
+            std::vector<std::string> lines;  // printed once the history is committed
             std::cout << "emadiag history-sim: " << o->sessions << " " << o->phase << " sessions of " << o->tail << " every "
                       << num(o->days_between) << " days from " << o->start_utc << ", case " << o->load_case << ", noise " << o->noise
-                      << ", seed " << o->seed << "\n";
+                      << ", seed " << o->seed << "\n" << std::flush;
+            const auto nothing_stored = [&](int session, const std::string& why) {
+                return EmadiagError("history-sim: " + why + " at session " + std::to_string(session) + " of " + std::to_string(o->sessions) +
+                                    "; nothing was stored: a history is stored whole (one transaction) or not at all, and " + o->db +
+                                    " is as it was before the command");
+            };
             for (int i = 0; i < o->sessions; ++i) {
+                if (interrupted.load()) throw nothing_stored(i + 1, "interrupted (SIGINT or SIGTERM)");
                 const double t_days = i * o->days_between;
                 const double fdj_nm = o->fdj_start_nm + o->fdj_rate_nm_per_100d * t_days / kRatePeriodDays;
                 const double fsj_nm = o->fsj_start_nm + o->fsj_rate_nm_per_100d * t_days / kRatePeriodDays;
@@ -165,8 +178,8 @@ const bool registered = register_command(Command{
                     try {
                         c.params.validate();
                     } catch (const std::exception& e) {
-                        throw EmadiagError("session " + std::to_string(i + 1) + " (day " + num(t_days) + "): true FDJ " + num(fdj_nm) +
-                                           " N m, FSJ " + num(fsj_nm) + " N m: " + e.what());
+                        throw nothing_stored(i + 1, "session " + std::to_string(i + 1) + " (day " + num(t_days) + "): true FDJ " + num(fdj_nm) +
+                                                        " N m, FSJ " + num(fsj_nm) + " N m: " + e.what());
                     }
                     c.seed = splitmix64(o->seed ^ splitmix64(static_cast<std::uint64_t>(2 * i + k++)));
                     const sim::SimResult result = sim::simulate(c);
@@ -207,13 +220,21 @@ const bool registered = register_command(Command{
                         physics_fdj = num(*f.value, 5) + " +/- " + num(f.std_error.value_or(0), 2);
                 for (const auto& a : assessed)
                     if (a.estimates) add_model_artifacts(s, a.estimates->model_files);
-                const db::SessionReceipt receipt = db::store_session(database, s);
+                db::SessionReceipt receipt;
+                try {
+                    receipt = batch.add(s);
+                } catch (const std::exception& e) {
+                    throw nothing_stored(i + 1, e.what());
+                }
                 const std::int64_t id = receipt.session_id;
-                if (receipt.installation) std::cout << "  " << describe_installation(*receipt.installation) << '\n';
-                std::cout << "  session " << id << "  " << started_utc << (s.cycles ? "  cycles " + std::to_string(*s.cycles) : "") << "  true FDJ " << num(fdj_nm, 5) << " FSJ " << num(fsj_nm, 5)
-                          << "  physics:dyn FDJ " << physics_fdj << "  " << s.verdict << '\n';
+                if (receipt.installation) lines.push_back("  " + describe_installation(*receipt.installation));
+                lines.push_back("  session " + std::to_string(id) + "  " + started_utc + (s.cycles ? "  cycles " + std::to_string(*s.cycles) : "") +
+                                "  true FDJ " + num(fdj_nm, 5) + " FSJ " + num(fsj_nm, 5) + "  physics:dyn FDJ " + physics_fdj + "  " + s.verdict);
             }
-            std::cout << "stored " << o->sessions << " test sessions of " << o->tail << " in " << io::escape_text(o->db) << '\n';
+            if (interrupted.load()) throw nothing_stored(o->sessions, "interrupted (SIGINT or SIGTERM)");
+            batch.commit();  // a busy or full database: DbError says nothing was written
+            for (const auto& line : lines) std::cout << line << '\n';
+            std::cout << "stored " << o->sessions << " test sessions of " << o->tail << " in " << io::escape_text(o->db) << " (one transaction)\n";
             return 0;
         };
     }});

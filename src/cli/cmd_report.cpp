@@ -182,9 +182,20 @@ const bool registered = register_command(Command{
         return [o] {
             db::OpenedSource database = db::open_record_source(o->db);
             const pg::FleetRecord record = pg::build_fleet_record(*database.source, o->tail, o->record);
+            // A record changed or damaged outside the tool is said in the report itself (and exit 5).
+            const std::vector<std::string> broken = database.source->record_problems(o->tail);
+            std::string warning;
+            if (!broken.empty()) {
+                warning = "RECORD CHANGED OR DAMAGED OUTSIDE THE TOOL: the hash chain of " + o->tail + " is broken (" +
+                          std::to_string(broken.size()) + " problem(s); the first: " + broken.front() +
+                          "); what follows may not be what was recorded: run emadiag verify --tail " + o->tail;
+                std::cerr << "emadiag report: " << warning << '\n';
+            }
             std::string text;
             if (o->format == "json") {
-                text = pg::to_json(record).dump(2) + "\n";
+                auto j = pg::to_json(record);
+                if (!broken.empty()) j["record_integrity"] = {{"intact", false}, {"problems", broken}};
+                text = j.dump(2) + "\n";
             } else if (o->format == "html") {
                 text = report::render_html(report::from_fleet_record(record, {pg::now_utc_time(), EMADIAG_VERSION, o->db}));
             } else if (o->format == "csv") {
@@ -192,10 +203,19 @@ const bool registered = register_command(Command{
             } else {
                 text = text_report(record);
             }
+            if (!warning.empty() && (o->format == "text" || o->format == "csv")) text = "# " + escape_text(warning) + "\n" + text;
+            if (!warning.empty() && o->format == "html") {
+                std::string escaped;
+                for (const char c : warning) escaped += c == '<' ? "&lt;" : c == '>' ? "&gt;" : c == '&' ? "&amp;" : c == '"' ? "&quot;" : std::string(1, c);
+                const std::string banner = "<p role=\"alert\" style=\"border:3px solid #b00;padding:8px;color:#b00;font-weight:bold\">" + escaped + "</p>\n";
+                const auto body = text.find("<body");
+                const auto at = body == std::string::npos ? std::string::npos : text.find('>', body);
+                text.insert(at == std::string::npos ? 0 : at + 1, "\n" + banner);
+            }
             write_output(o->out, text, database_input(o->db));
             if (!o->out.empty())
                 std::cerr << "wrote the " << o->format << " report of " << o->tail << " to " << escape_text(o->out) << " (" << text.size() << " bytes)\n";
-            return 0;
+            return broken.empty() ? 0 : 5;  // as emadiag verify: the record was changed outside the tool
         };
     }});
 

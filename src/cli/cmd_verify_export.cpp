@@ -1,6 +1,7 @@
-// emadiag verify --tail T [--db FILE]: recomputes the tail's hash chain (every session with its
-// runs, samples, raw logs, estimates, findings and artifacts) and reports any change made outside
-// the tool; exit 0 when intact, 5 when not.
+// emadiag verify --tail T [--db FILE] [--anchor FILE] [--expect-head HASH]: recomputes the tail's
+// hash chain (every session with its runs, samples, raw logs, estimates, findings and artifacts,
+// the discovery findings' chain, the installations the sessions imply), compares the chain heads
+// with the anchor file and reports any change made outside the tool; exit 0 when intact, 5 when not.
 // emadiag export --tail T [--db FILE] --format json|csv [--out FILE|DIR] [--no-samples]: the whole
 // record of a tail in the open format of docs/record-format.md, for the operator's MRO system. JSON
 // is one document; CSV is one file per table in the directory --out (required).
@@ -17,6 +18,7 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -253,17 +255,49 @@ void check_tail_known(db::Database& database, const std::string& tail) {
     if (!st.step()) throw EmadiagError("tail number \"" + tail + "\" is not in " + database.path());
 }
 
+/// The hex digits of a head given on the command line: 64 lowercase hex digits.
+bool is_head_hash(const std::string& h) {
+    return h.size() == 64 && std::all_of(h.begin(), h.end(), [](char c) { return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'); });
+}
+
+struct VerifyOptions {
+    std::string db = "maintenance.db";
+    std::string tail;
+    std::string anchor;       ///< empty: DB.anchor
+    std::string expect_head;  ///< empty: not given
+};
+
 const bool verify_registered = register_command(Command{
     "verify", "Check a tail's hash chain: detects any change made to its record outside the tool",
     [](CLI::App& sub) -> std::function<int()> {
-        auto db_path = std::make_shared<std::string>("maintenance.db");
-        auto tail = std::make_shared<std::string>();
-        sub.add_option("--db", *db_path, "Maintenance database (SQLite)")->capture_default_str()->check(sqlite_file());
-        sub.add_option("--tail", *tail, "Aircraft tail number")->required();
-        return [db_path, tail] {
-            db::Database database(*db_path);
-            check_tail_known(database, *tail);
-            const db::ChainCheck c = db::verify_tail(database, *tail);
+        auto o = std::make_shared<VerifyOptions>();
+        sub.add_option("--db", o->db, "Maintenance database (SQLite)")->capture_default_str()->check(sqlite_file());
+        sub.add_option("--tail", o->tail, "Aircraft tail number")->required();
+        sub.add_option("--anchor", o->anchor,
+                       "Anchor file to compare the chain heads with (default DB.anchor, which every store appends to; "
+                       "docs/record-format.md, \"Anchoring the head\")");
+        sub.add_option("--expect-head", o->expect_head,
+                       "The tail's head hash as noted elsewhere (e.g. in the MRO system at the last export): exit 5 unless the "
+                       "chain still holds it");
+        return [o] {
+            if (!o->expect_head.empty() && !is_head_hash(o->expect_head))
+                throw EmadiagError("--expect-head '" + o->expect_head + "' is not a head hash: give the 64 lowercase hex digits verify or export printed");
+            db::Database database(o->db);
+            if (!o->anchor.empty()) database.set_anchor_path(o->anchor);
+            check_tail_known(database, o->tail);
+            db::ChainCheck c = db::verify_tail(database, o->tail);
+            if (!o->expect_head.empty() && c.head_sha256 != o->expect_head) {
+                // The expected head may be an earlier one: the chain must still hold it.
+                bool held = false;
+                db::Statement st(database, "SELECT 1 FROM test_sessions WHERE tail_number = ? AND content_sha256 = ?");
+                st.bind(1, o->tail).bind(2, o->expect_head);
+                held = st.step();
+                if (!held)
+                    c.problems.push_back("the expected head " + o->expect_head.substr(0, 16) + "... is not in the chain (its head is " +
+                                         c.head_sha256.substr(0, 16) + "...): sessions were removed or the chain was rewritten outside the tool");
+                else
+                    c.notes.push_back("the expected head " + o->expect_head.substr(0, 16) + "... is an earlier session of the chain: sessions were added since");
+            }
             // The whole file, every page: the check at open is bounded for a large file
             // (db::Database::IntegrityScope), this one is not.
             const auto t0 = std::chrono::steady_clock::now();
@@ -272,14 +306,21 @@ const bool verify_registered = register_command(Command{
             std::ostringstream file_line;
             file_line << "emadiag verify: database file " << escape_text(database.path()) << ": PRAGMA quick_check of every page "
                       << (problems.empty() ? "ok" : "FAILED") << " (" << std::fixed << std::setprecision(2) << seconds << " s)\n";
+            const std::string covered = std::to_string(c.sessions_checked) + " sessions";
+            const std::string anchor = c.anchor_path.empty() ? "no anchor compared"
+                                                             : "anchor " + escape_text(c.anchor_path) + ": " + std::to_string(c.anchor_lines_checked) + " line(s) compared";
             if (c.ok()) {
-                std::cout << "emadiag verify: tail " << *tail << ": " << c.sessions_checked << " sessions, hash chain intact; head " << c.head_sha256
-                          << '\n';
+                std::cout << "emadiag verify: tail " << o->tail << ": " << covered << ", hash chain intact; head " << c.head_sha256 << '\n';
             } else {
-                std::cout << "emadiag verify: tail " << *tail << ": RECORD CHANGED OUTSIDE THE TOOL (" << c.problems.size() << " problem(s) in "
-                          << c.sessions_checked << " sessions)\n";
+                std::cout << "emadiag verify: tail " << o->tail << ": RECORD CHANGED OUTSIDE THE TOOL (" << c.problems.size() << " problem(s) in "
+                          << covered << ")\n";
                 for (const auto& p : c.problems) std::cout << "  " << escape_text(p) << '\n';
             }
+            std::cout << "emadiag verify: with them " << c.discovery_findings_checked << " discovery finding(s) (their own chain"
+                      << (c.discovery_head_sha256.empty() ? "" : ", head " + c.discovery_head_sha256) << ") and " << c.installations_checked
+                      << " installation(s) (recomputed from the sessions)\n";
+            std::cout << "emadiag verify: " << anchor << '\n';
+            for (const auto& n : c.notes) std::cout << "  note: " << n << '\n';
             std::cout << file_line.str();
             for (const auto& p : problems) std::cout << "  " << escape_text(p) << '\n';
             if (!c.ok()) return kExitTampered;
@@ -304,13 +345,20 @@ const bool export_registered = register_command(Command{
             if (o->format == "csv") {
                 if (o->out.empty()) throw EmadiagError("--format csv writes one file per table: give --out DIR");
                 export_csv(database, o->tail, !o->no_samples, o->out);
+                const db::ChainCheck chain = db::verify_tail(database, o->tail);
                 std::cout << "exported the record of " << o->tail << " to " << escape_text(o->out) << "/ (sessions, findings, artifacts, runs, estimates, samples, "
                           << "installations, discovery_findings, positions .csv)\n";
-                return 0;
+                std::cout << "head " << chain.head_sha256 << " (" << chain.sessions_checked << " sessions, chain "
+                          << (chain.ok() ? "intact" : "BROKEN: run emadiag verify") << "): note it to check later with emadiag verify --expect-head\n";
+                return chain.ok() ? 0 : kExitTampered;
             }
             const db::ChainCheck chain = db::verify_tail(database, o->tail);
             write_output(o->out, export_json(database, o->tail, !o->no_samples, chain).dump(1) + "\n", io::OutputInputs({}, {o->db}));
-            return 0;
+            // The head, where a person sees it (on stdout the document itself holds it: chain.head_sha256).
+            if (!o->out.empty())
+                std::cout << "head " << chain.head_sha256 << " (" << chain.sessions_checked << " sessions, chain "
+                          << (chain.ok() ? "intact" : "BROKEN: run emadiag verify") << "): note it to check later with emadiag verify --expect-head\n";
+            return chain.ok() ? 0 : kExitTampered;
         };
     }});
 

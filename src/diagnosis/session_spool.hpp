@@ -20,7 +20,7 @@ namespace emadiag {
 struct SpooledLog {
     std::string sequence;   ///< "dyn" or "brk"
     int attempt = 1;        ///< 2 for the automatic retry after a transient loss
-    std::string log_path;   ///< the raw candump log
+    std::string log_path;   ///< the raw candump log: its file name inside the spool directory
 };
 
 struct SessionManifest {
@@ -84,12 +84,18 @@ struct RecoveredSession {
     std::string verdict;
     std::string note;
     bool nothing_recorded = false;  ///< no frame reached a raw log: the manifest was removed, nothing stored
+    bool refused = false;  ///< the manifest is bad (note says why): left in place, nothing stored
 };
 
 /// Stores every spooled session of `db_path` (oldest first). A session already in the database
 /// (same tail, phase and start time) is not stored twice: its manifest is just removed. A session
-/// whose tool is still running (its lock is held) is left alone. A manifest that cannot be read is
-/// left in place and reported through `on_progress`, never deleted.
+/// whose tool is still running (its lock is held) is left alone. A manifest's raw logs must be
+/// regular files inside the spool directory, named by their plain file name (no absolute path, no
+/// directory, no .., no symbolic link, one hard link, at most 256 MiB): a manifest naming any other
+/// file is never stored (its bytes would go into the database and on to the fleet server). A bad
+/// manifest (unreadable, such a log, or a session the database refuses) is reported through
+/// `on_progress` and returned with `refused` set, left in place, never deleted; the good ones are
+/// still stored.
 std::vector<RecoveredSession> recover_spooled_sessions(const std::string& db_path, const std::function<void(const std::string&)>& on_progress);
 
 }  // namespace emadiag

@@ -165,6 +165,27 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
     }
     for (const auto seq : options.sequences) manifest.sequences.push_back(sequence_name(seq));
     SessionSpool spool(spool_dir_for(options.db_path), manifest);
+    // The raw logs are recorded inside the spool directory (recover takes no file from elsewhere)
+    // and moved to the output directory once the session is stored.
+    const std::filesystem::path spool_dir = spool.path().parent_path();
+    const auto move_logs_out = [&] {
+        for (const auto& l : spool.manifest().logs) {
+            const std::filesystem::path from = spool_dir / l.log_path, to = options.out_dir / l.log_path;
+            std::error_code move_ec;
+            if (!std::filesystem::exists(from, move_ec)) continue;
+            std::filesystem::rename(from, to, move_ec);
+            if (move_ec) {  // another file system: copy, then remove the spool's copy
+                std::filesystem::copy_file(from, to, std::filesystem::copy_options::overwrite_existing, move_ec);
+                if (move_ec) {
+                    say("raw log " + from.string() + " stays in the spool directory: it could not be moved to " + to.string() + ": " + move_ec.message());
+                    continue;
+                }
+                std::filesystem::remove(from, move_ec);
+            }
+            for (auto& r : result.runs)
+                if (r.log_path == from.string()) r.log_path = to.string();
+        }
+    };
 
     const std::string stem_prefix = options.tail_number + "_" + compact(result.started_utc) + "_" + options.phase + "_";
     std::uint16_t session_id = options.first_session_id;
@@ -181,7 +202,8 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
             rec.attempt = attempt;
             const std::filesystem::path stem =
                 options.out_dir / (stem_prefix + rec.sequence + (attempt > 1 ? "_attempt" + std::to_string(attempt) : std::string()));
-            rec.log_path = stem.string() + ".log";
+            const std::string log_name = stem.filename().string() + ".log";
+            rec.log_path = (spool_dir / log_name).string();
             rec.csv_path = stem.string() + ".csv";
             can_tool::RecorderOptions ro;
             ro.sequence = seq;
@@ -189,7 +211,7 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
             ro.log_path = rec.log_path;
             ro.answer_timeout = options.answer_timeout;
             ro.shared_heartbeat = &heartbeat;
-            spool.add_log(SpooledLog{rec.sequence, attempt, rec.log_path});
+            spool.add_log(SpooledLog{rec.sequence, attempt, log_name});
             say("running " + rec.sequence + (attempt > 1 ? " again" : "") + " (session " + std::to_string(ro.session_id) + ") on " +
                 bus.spec());
             try {
@@ -205,6 +227,7 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
                 stop = true;
                 try {
                     rec.outcome.run = read_run_candump(rec.log_path);
+                    rec.outcome.run.set_meta("log_file", (options.out_dir / log_name).string());
                     rec.outcome.run.set_meta("tail_number", options.tail_number);
                     rec.outcome.run.set_meta("phase", options.phase);
                     rec.outcome.run.set_meta("valid", "false");
@@ -220,6 +243,8 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
             }
             rec.outcome.run.set_meta("tail_number", options.tail_number);
             rec.outcome.run.set_meta("phase", options.phase);
+            // Where the raw log will be once the session is stored (it is recorded in the spool).
+            rec.outcome.run.set_meta("log_file", (options.out_dir / log_name).string());
             write_run_csv_file(rec.csv_path, rec.outcome.run);
             const auto& st = rec.outcome.stats;
             const auto& lp = rec.outcome.loop;
@@ -270,6 +295,7 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
         result.assessment.reason = "the " + failed_sequence + " sequence could not be run: " + *failure;
         if (result.runs.empty()) {
             spool.remove();  // nothing was recorded: nothing to store
+            move_logs_out();
             throw EmadiagError(*failure);
         }
     } else if (result.interrupted) {
@@ -299,6 +325,7 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
                            " and `emadiag recover --db " + options.db_path + "` (or the next test-run) stores it");
     }
     spool.remove();
+    move_logs_out();
     result.db_session_id = receipt.session_id;
     result.content_sha256 = receipt.content_sha256;
     result.installation = receipt.installation;

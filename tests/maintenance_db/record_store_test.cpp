@@ -30,7 +30,7 @@ using test::RawConnection;
 using test::read_text_file;
 using test::TempDbFile;
 
-constexpr int kNewestSchemaVersion = 6;
+constexpr int kNewestSchemaVersion = 7;
 
 StoredTestSession session_at(const std::string& tail, const std::string& position, const std::string& serial, const std::string& utc,
                              double fdj_nm, std::optional<std::int64_t> cycles = std::nullopt) {

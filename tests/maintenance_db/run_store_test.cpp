@@ -20,7 +20,7 @@ StoredRun example_run(const std::string& tail = "F-WEMA") { return test::example
 
 TEST(RunStore, StoreThenLoadGivesBackEverything) {
     Database db(":memory:");
-    EXPECT_EQ(db.schema_version(), 6);
+    EXPECT_EQ(db.schema_version(), 7);
     const StoredRun in = example_run();
     const auto id = store_run(db, in);
     const StoredRun out = load_run(db, id);
@@ -82,7 +82,7 @@ TEST(Database, ReopensAFileWithoutMigratingTwiceAndRefusesNewerSchemas) {
     }
     {
         Database db(path);
-        EXPECT_EQ(db.schema_version(), 6);
+        EXPECT_EQ(db.schema_version(), 7);
         EXPECT_EQ(list_runs(db, "F-WEMA").size(), 1U);
         db.exec("PRAGMA user_version = 99");
     }

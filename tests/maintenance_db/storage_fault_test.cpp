@@ -32,9 +32,9 @@ namespace {
 constexpr int kSamplesPerRun = 2000;
 constexpr int kFindingsPerSession = 3;
 
-db::StoredTestSession example_session(int i) {
+db::StoredTestSession example_session(int i, const std::string& tail = "F-WEMA") {
     db::StoredTestSession s;
-    s.tail_number = "F-WEMA";
+    s.tail_number = tail;
     s.actuator_serial = "SN-0042";
     s.phase = "pre-flight";
     s.started_utc = "2026-11-22T20:00:" + std::string(i % 60 < 10 ? "0" : "") + std::to_string(i % 60) + "Z";
@@ -139,8 +139,11 @@ TEST_F(StorageFaults, WriterKilledAtRandomPointsFiftyTimesLeavesWholeSessionsOnl
         ASSERT_GE(pid, 0);
         if (pid == 0) {
             try {
+                // A tail per kill: each store verifies its tail's chain first (a few sessions here),
+                // so the kill window stays one of writes, as the timing above measured.
                 db::Database d(path_);
-                for (int i = 0;; ++i) (void)db::store_test_session(d, example_session(i));
+                const std::string tail = "F-K" + std::to_string(kill);
+                for (int i = 0;; ++i) (void)db::store_test_session(d, example_session(i, tail));
             } catch (...) {
             }
             ::_exit(3);

@@ -66,7 +66,7 @@ TEST(SyncMigration, AVersion4FileGetsAStationIdentityAndKeepsEverySession) {
         ASSERT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE name = 'station_identity'"), 0);
     }
     Database db(v4_path);
-    EXPECT_EQ(db.schema_version(), 6);
+    EXPECT_EQ(db.schema_version(), 7);
     const std::string uuid = uuid_of(db);
     EXPECT_TRUE(std::regex_match(uuid, std::regex("[0-9a-f]{8}-[0-9a-f]{4}-4[0-9a-f]{3}-[89ab][0-9a-f]{3}-[0-9a-f]{12}"))) << uuid;
     const auto sessions = list_test_sessions(db, "N5EM");

@@ -33,7 +33,7 @@ using ::testing::Pair;
 using ::testing::SizeIs;
 using ::testing::ThrowsMessage;
 
-constexpr int kNewestSchemaVersion = 6;  // schema/006_clustered_by_tail.sql
+constexpr int kNewestSchemaVersion = 7;  // schema/007_chain_coverage.sql
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 

@@ -35,6 +35,7 @@ private:
         std::error_code ignored;
         std::filesystem::remove(path_, ignored);
         std::filesystem::remove(path_ + "-journal", ignored);
+        std::filesystem::remove(path_ + ".anchor", ignored);
     }
     std::string path_;
 };

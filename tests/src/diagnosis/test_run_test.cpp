@@ -107,6 +107,14 @@ TEST_F(TestRun, HealthyEmaIsServiceableAndEverythingIsStoredUnderTheTail) {
     EXPECT_FALSE(s.runs[1].raw_log.empty());
     EXPECT_FALSE(s.runs[1].estimates.empty());
     EXPECT_EQ(s.runs[0].load_case, "A");
+    // Recorded inside the spool directory (recover takes no file from elsewhere), then moved to the
+    // output directory, which the stored run's log_file names.
+    for (const auto& run : s.runs) {
+        const std::string log_file = nlohmann::json::parse(run.meta_json).value("log_file", "");
+        EXPECT_EQ(std::filesystem::path(log_file).parent_path(), dir_ / "logs");
+        EXPECT_EQ(run.raw_log, slurp(log_file));
+    }
+    EXPECT_TRUE(std::filesystem::is_empty(spool_dir_for(o.db_path)));
 }
 
 TEST_F(TestRun, TheRecordKeepsPositionSerialCyclesAndThePersonAndNotesAnInstallationChange) {
@@ -297,8 +305,11 @@ TEST_F(TestRun, TransientLossIsRunOnceMoreAndBothAttemptsAreStored) {
 }
 
 TEST_F(TestRun, SpooledSessionOfAKilledToolIsRecoveredOnceNeverTwice) {
-    // What a kill -9 leaves: a raw log and a manifest still "recording".
-    const std::string log_path = (dir_ / "killed_dyn.log").string();
+    // What a kill -9 leaves: a raw log in the spool directory and a manifest still "recording".
+    const TestRunOptions o = options("N123EM");
+    std::filesystem::create_directories(spool_dir_for(o.db_path));
+    const std::string log_name = "killed_dyn.log";
+    const std::string log_path = (spool_dir_for(o.db_path) / log_name).string();
     {
         can::MemoryBusHub hub;
         can::MemoryBus tool(hub, "tool");
@@ -308,7 +319,6 @@ TEST_F(TestRun, SpooledSessionOfAKilledToolIsRecoveredOnceNeverTwice) {
         can_tool::Recorder rec(tool, ro);
         (void)rec.record(interrupt_);
     }
-    const TestRunOptions o = options("N123EM");
     SessionManifest m;
     m.tail_number = "N123EM";
     m.phase = kPhasePostFlight;
@@ -319,7 +329,7 @@ TEST_F(TestRun, SpooledSessionOfAKilledToolIsRecoveredOnceNeverTwice) {
     std::filesystem::path manifest;
     {
         SessionSpool spool(spool_dir_for(o.db_path), m);
-        spool.add_log(SpooledLog{"dyn", 1, log_path});
+        spool.add_log(SpooledLog{"dyn", 1, log_name});
         manifest = spool.path();
         // While the tool lives, its lock keeps every other recovery away from the session.
         EXPECT_TRUE(recover_spooled_sessions(o.db_path, nullptr).empty());
@@ -330,7 +340,9 @@ TEST_F(TestRun, SpooledSessionOfAKilledToolIsRecoveredOnceNeverTwice) {
 
     std::vector<std::string> said;
     const auto first = recover_spooled_sessions(o.db_path, [&](const std::string& l) { said.push_back(l); });
-    ASSERT_EQ(first.size(), 1u);
+    ASSERT_EQ(first.size(), 2u) << "the good manifest stored, the bad one refused";
+    EXPECT_TRUE(first[1].refused);
+    EXPECT_EQ(first[1].manifest.filename(), "N999EM_bad.json");
     EXPECT_GT(first[0].db_session_id, 0);
     EXPECT_EQ(first[0].verdict, "NO_TEST");
     EXPECT_THAT(first[0].note, HasSubstr("the tool stopped mid-session (while recording dyn)"));
@@ -351,8 +363,9 @@ TEST_F(TestRun, SpooledSessionOfAKilledToolIsRecoveredOnceNeverTwice) {
     // The tool died after storing but before removing the manifest: not stored twice.
     {
         SessionSpool again(spool_dir_for(o.db_path), m);
-        again.add_log(SpooledLog{"dyn", 1, log_path});
+        again.add_log(SpooledLog{"dyn", 1, log_name});
     }
+    std::filesystem::remove(bad);
     const auto second = recover_spooled_sessions(o.db_path, nullptr);
     ASSERT_EQ(second.size(), 1u);
     EXPECT_EQ(second[0].db_session_id, 0);
@@ -372,12 +385,13 @@ TEST_F(TestRun, SpooledSessionKilledBeforeTheEmaAnsweredKeepsItsFramesOrIsDroppe
     m.tool_version = "test";
     m.limits_json = HealthLimits::datasheet_envelope().to_json().dump();
     m.sequences = {"dyn"};
-    const std::string cut_log = (dir_ / "cut_dyn.log").string();
+    std::filesystem::create_directories(spool_dir_for(o.db_path));
+    const std::string cut_log = (spool_dir_for(o.db_path) / "cut_dyn.log").string();
     std::ofstream(cut_log) << "(1795525640.771675) can0 011#0100000000000000\n"
                               "(1795525640.791645) can0 010#0100000000000000\n";
     {
         SessionSpool spool(spool_dir_for(o.db_path), m);
-        spool.add_log(SpooledLog{"dyn", 1, cut_log});
+        spool.add_log(SpooledLog{"dyn", 1, "cut_dyn.log"});
     }
     const auto kept = recover_spooled_sessions(o.db_path, nullptr);
     ASSERT_EQ(kept.size(), 1u);
@@ -392,13 +406,13 @@ TEST_F(TestRun, SpooledSessionKilledBeforeTheEmaAnsweredKeepsItsFramesOrIsDroppe
         EXPECT_THAT(s.runs[0].status_note, HasSubstr("no run could be decoded from the raw log"));
         EXPECT_EQ(s.runs[0].raw_log, slurp(cut_log));
     }
-    const std::string empty_log = (dir_ / "empty_dyn.log").string();
+    const std::string empty_log = (spool_dir_for(o.db_path) / "empty_dyn.log").string();
     std::ofstream(empty_log).flush();
     m.started_utc = "2026-11-24T12:00:00Z";
     std::filesystem::path manifest;
     {
         SessionSpool spool(spool_dir_for(o.db_path), m);
-        spool.add_log(SpooledLog{"dyn", 1, empty_log});
+        spool.add_log(SpooledLog{"dyn", 1, "empty_dyn.log"});
         manifest = spool.path();
     }
     std::vector<std::string> said;

@@ -63,7 +63,7 @@ public:
     /// What integrity_problems checks.
     enum class IntegrityScope {
         /// The bounded check at open: the header's page count against the file size (a truncated
-        /// file), the schema, and PRAGMA quick_check of every table a store updates in place (the
+        /// file, or bytes appended after the last page; both scopes check this), the schema, and PRAGMA quick_check of every table a store updates in place (the
         /// summary tables, chain heads, positions, aircraft) with their indexes. The large append-only
         /// tables are checked page by page as SQLite reads them (PRAGMA cell_size_check is on), so a
         /// write that meets a corrupt page fails and rolls back; the full check is `emadiag verify`.
@@ -88,6 +88,18 @@ public:
     [[nodiscard]] sqlite3* handle() const { return db_; }
     [[nodiscard]] const std::string& path() const { return path_; }
     [[nodiscard]] int busy_timeout_ms() const { return busy_timeout_ms_; }
+    /// The anchor file every store appends each tail's chain head to (docs/record-format.md,
+    /// "Anchoring the head"): DB.anchor beside the database by default, none ("") for ":memory:".
+    [[nodiscard]] const std::string& anchor_path() const { return anchor_path_; }
+    void set_anchor_path(std::string path) { anchor_path_ = std::move(path); }
+    /// The head of a tail's chain this connection has verified whole (verify_tail) or appended to
+    /// after such a check ("" none): a store through the same connection need not read the whole
+    /// record again while the chain head is still that one (a writer storing in a loop).
+    [[nodiscard]] std::string verified_head(const std::string& tail_number) const {
+        const auto it = verified_heads_.find(tail_number);
+        return it == verified_heads_.end() ? std::string() : it->second;
+    }
+    void set_verified_head(const std::string& tail_number, std::string head) { verified_heads_[tail_number] = std::move(head); }
     /// "message (path)" for the last error on this connection.
     [[nodiscard]] std::string error_text() const;
     /// A statement prepared once per connection and kept (for the bulk paths); reset and unbound
@@ -101,11 +113,16 @@ private:
     /// Throws DbError, before anything is written, for a read-only file and for a corrupt or
     /// truncated one (PRAGMA quick_check).
     void check_before_write();
+    /// The file's size against the page count its header records (read under a shared lock, after
+    /// a hot journal was rolled back): a truncated file, or bytes after the last page. Empty: sound.
+    [[nodiscard]] std::optional<std::string> file_size_problem();
     void migrate();
     sqlite3* db_ = nullptr;
     std::string path_;
+    std::string anchor_path_;
     int busy_timeout_ms_ = kDefaultBusyTimeoutMs;
     std::unordered_map<std::string, std::unique_ptr<Statement>> cache_;
+    std::unordered_map<std::string, std::string> verified_heads_;
 };
 
 /// Begins a transaction; rolls back in the destructor unless commit() was called. Never throws

@@ -12,6 +12,9 @@ enum class DbErrorKind {
     Full,      ///< the disk (or the database's size limit) is full; nothing was written
     Corrupt,   ///< the file is not a sound SQLite database; it is never written to
     ReadOnly,  ///< the file or its directory cannot be written
+    /// a tail's hash chain (or its anchor) shows a change made outside the tool: nothing is appended
+    /// to it (emadiag verify names every problem)
+    BrokenChain,
     Other,
 };
 

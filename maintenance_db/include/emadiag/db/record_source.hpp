@@ -38,6 +38,9 @@ public:
     [[nodiscard]] virtual std::vector<StoredPosition> positions() = 0;
     [[nodiscard]] virtual std::vector<SeriesStats> series_stats() = 0;
     [[nodiscard]] virtual std::vector<PositionStatus> position_status() = 0;
+    /// The problems verify_tail finds in the tail's record (empty: intact, or not checkable here:
+    /// a fleet server keeps the hashes the stations sent, and each station verifies its own file).
+    [[nodiscard]] virtual std::vector<std::string> record_problems(const std::string& /*tail_number*/) { return {}; }
 };
 
 /// The station's SQLite file (the functions of test_session_store.hpp and record_store.hpp).
@@ -57,6 +60,7 @@ public:
     [[nodiscard]] std::vector<StoredPosition> positions() override;
     [[nodiscard]] std::vector<SeriesStats> series_stats() override;
     [[nodiscard]] std::vector<PositionStatus> position_status() override;
+    [[nodiscard]] std::vector<std::string> record_problems(const std::string& tail_number) override;
 
 private:
     Database& db_;

@@ -98,13 +98,31 @@ struct ChainCheck {
     std::string tail_number;
     std::int64_t sessions_checked = 0;
     std::string head_sha256;            ///< the last session's content_sha256 (to note in the MRO system)
+    std::int64_t discovery_findings_checked = 0;
+    std::string discovery_head_sha256;  ///< the head of the tail's discovery findings' chain ("" none)
+    std::int64_t installations_checked = 0;
+    std::string anchor_path;            ///< the anchor file compared ("" none)
+    std::int64_t anchor_lines_checked = 0;
     std::vector<std::string> problems;  ///< empty: every session is as stored by the tool
+    std::vector<std::string> notes;     ///< not problems: e.g. no anchor file to compare with
     [[nodiscard]] bool ok() const { return problems.empty(); }
 };
 /// Recomputes every session's content hash of the tail (with its runs, samples, raw logs, estimates,
 /// findings and artifacts) in session_id order and checks each against the stored hash, each link
-/// to the previous session and the chain head (which shows a deleted last session). A change made
-/// outside the tool shows as a problem naming the session.
+/// to the previous session and the chain head (which shows a deleted last session); every discovery
+/// finding's hash and their chain; the installations, which are derived from the sessions (each is
+/// recomputed from them); and the anchor file db.anchor_path() (a deleted last session with a
+/// rewritten chain head shows there: docs/record-format.md, "Anchoring the head"). A change made
+/// outside the tool shows as a problem naming the session, finding or installation.
+/// Reads one consistent snapshot (a read transaction unless the caller has one open).
 [[nodiscard]] ChainCheck verify_tail(Database& db, const std::string& tail_number);
+/// As above; without the anchor file when compare_anchor is false (what a store checks before it
+/// appends: the database's own chain. A database restored from a backup is older than its anchor:
+/// verify says so, and stores go on).
+[[nodiscard]] ChainCheck verify_tail(Database& db, const std::string& tail_number, bool compare_anchor);
+
+/// The chain link of a discovery finding: SHA-256 over "emadiag-discovery-chain-v1\n", the previous
+/// link ("" for the first finding of the tail) and the finding's content_sha256.
+[[nodiscard]] std::string discovery_chain_link(const std::string& prev_link, const std::string& content_sha256);
 
 }  // namespace emadiag::db

@@ -6,6 +6,7 @@
 #include "emadiag/db/run_store.hpp"
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -82,11 +83,36 @@ struct SessionReceipt {
     std::optional<StoredInstallation> installation;  ///< recorded when the position showed a new serial
 };
 
-/// Stores the session like store_test_session and says what it did.
+/// Stores the session like store_test_session and says what it did. The tail's whole record is
+/// verified first (verify_tail): nothing is appended to a broken chain (DbError, kind BrokenChain,
+/// naming the tail and the first problem). After the commit the tail's head is appended to the
+/// database's anchor file (Database::anchor_path).
 [[nodiscard]] SessionReceipt store_session(Database& db, const StoredTestSession& session);
 
+/// Sessions stored one at a time into ONE transaction, all of them or none (emadiag history-sim: a
+/// history is whole or absent, even when a session fails to simulate or the process is killed).
+/// Each tail's whole record is verified (verify_tail) before the first session is appended to it:
+/// DbError (kind BrokenChain) names the tail and the first problem, and nothing is stored. commit()
+/// writes the summaries, commits and appends each tail's head to the anchor file; a batch destroyed
+/// without commit() rolls back (never throws).
+class SessionBatch {
+public:
+    explicit SessionBatch(Database& db);
+    ~SessionBatch();
+    SessionBatch(const SessionBatch&) = delete;
+    SessionBatch& operator=(const SessionBatch&) = delete;
+    /// Checks and writes one session inside the batch's transaction (begun by the first add).
+    SessionReceipt add(const StoredTestSession& session);
+    void commit();
+
+private:
+    struct State;
+    std::unique_ptr<State> state_;
+};
+
 /// Stores many sessions in ONE transaction (bulk import, e.g. from another maintenance system):
-/// all of them or none. Each is checked first; DbError names the batch index.
+/// all of them or none. Each is checked first; DbError names the batch index. Each tail's chain
+/// head is checked before appending to it (its newest session recomputed), not its whole chain.
 [[nodiscard]] std::vector<SessionReceipt> store_sessions(Database& db, const std::vector<StoredTestSession>& sessions);
 
 /// Stores the session, all its runs (samples, raw logs, estimates) and findings in ONE transaction;
