@@ -249,7 +249,7 @@ const bool verify_registered = register_command(Command{
         sub.add_option("--db", *db_path, "Maintenance database (SQLite)")->capture_default_str()->check(CLI::ExistingFile);
         sub.add_option("--tail", *tail, "Aircraft tail number")->required();
         return [db_path, tail] {
-            db::Database database(*db_path);
+            db::Database database(*db_path, db::Database::kDefaultBusyTimeoutMs, true, db::Database::Access::ReadOnly);
             check_tail_known(database, *tail);
             const db::ChainCheck c = db::verify_tail(database, *tail);
             // The whole file, every page: the check at open is bounded for a large file
@@ -287,7 +287,7 @@ const bool export_registered = register_command(Command{
         sub.add_option("--out", o->out, "JSON: the file (default stdout); CSV: the directory (required)");
         sub.add_flag("--no-samples", o->no_samples, "Leave out the 2 kHz samples and raw logs (their hashes stay)");
         return [o] {
-            db::Database database(o->db);
+            db::Database database(o->db, db::Database::kDefaultBusyTimeoutMs, true, db::Database::Access::ReadOnly);
             check_tail_known(database, o->tail);
             if (o->format == "csv") {
                 if (o->out.empty()) throw EmadiagError("--format csv writes one file per table: give --out DIR");

@@ -1,5 +1,6 @@
 // emadiag: ground-maintenance diagnostics for EMA transmissions.
 #include "cli/command.hpp"
+#include "cli/numeric_option.hpp"
 
 #include <algorithm>
 #include <exception>
@@ -32,6 +33,7 @@ int main(int argc, char** argv) {
         auto run = c.setup(*sub);
         sub->callback([&action, run] { action = run; });
     }
+    check_every_number(app);  // one strict parser for every numeric option (numeric_option.hpp)
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

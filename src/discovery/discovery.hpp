@@ -29,7 +29,17 @@ namespace emadiag::discovery {
 /// At most this many effects are added (the criterion usually stops earlier).
 inline constexpr int kMaxEffects = 3;
 
+/// Most samples of one run discovery analyses (issue 21 item 12): a longer run is analysed on its
+/// first kMaxAnalysedSamples samples (5 s at 2 kHz, ten times a DYN run; the re-simulations start
+/// from rest at t = 0, so the window is the run's start), and the report says so (analysis_text).
+/// This bounds the time and memory of any run within the run CSV's row limit (docs/discovery.md).
+inline constexpr std::size_t kMaxAnalysedSamples = 10'000;
+
+/// The run's first `max_samples` samples (the whole run when it is not longer), with its metadata.
+[[nodiscard]] Run analysis_window(const Run& run, std::size_t max_samples = kMaxAnalysedSamples);
+
 struct DiscoveryOptions {
+    std::size_t max_samples = kMaxAnalysedSamples;  ///< a longer run is analysed on its first max_samples
     int max_effects = kMaxEffects;
     bool open_world = true;  ///< screen the generated term library and the sensor stage (issue 10)
 };
@@ -143,7 +153,11 @@ struct EfficiencyAlternative {
 
 struct DiscoveryReport {
     std::string load_case, sequence;
-    std::size_t samples = 0;
+    std::size_t samples = 0;         ///< samples analysed
+    std::size_t total_samples = 0;   ///< samples in the run (more than `samples` when it was windowed)
+    double analysed_end_s = 0;       ///< time of the last sample analysed
+    /// "" when the whole run was analysed; else "analysed 10000 of 2000000 samples in 1 window (t = ...)".
+    [[nodiscard]] std::string analysis_text() const;
     NoiseFloor floor;                            ///< the run's own noise floor (trajectory.hpp)
     std::vector<SensorFinding> sensor_findings;
     LowSpeedStage low_speed;                     ///< Stribeck friction found by the trajectory (library effect)
