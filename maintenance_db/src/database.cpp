@@ -7,6 +7,7 @@
 #include "schema_sql.hpp"
 
 #include <sqlite3.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -117,7 +118,18 @@ Database::Database(const std::string& path, int busy_timeout_ms, bool quick_chec
         // Off while migrating: version 3 rebuilds test_sessions, which other tables reference.
         if (read_only) {
             const int have = schema_version(), newest = static_cast<int>(std::size(kSchemaMigrations));
-            if (have != newest) {
+            if (have < newest && ::access(path_.c_str(), W_OK) == 0) {
+                // An older file on writable storage is migrated first, as every command did before,
+                // by a connection of its own; this one then reads the migrated file.
+                cache_.clear();
+                sqlite3_close(db_);
+                db_ = nullptr;
+                { Database migrating(path_, busy_timeout_ms, false, Access::ReadWrite); }
+                const int again = sqlite3_open_v2(path_.c_str(), &db_, SQLITE_OPEN_READONLY | SQLITE_OPEN_NOMUTEX, nullptr);
+                if (again != SQLITE_OK) throw DbError("cannot open database " + path_ + ": " + sqlite3_errstr(again), kind_of(again));
+                sqlite3_busy_timeout(db_, busy_timeout_ms);
+                exec("PRAGMA cell_size_check = ON");
+            } else if (have != newest) {
                 throw DbError("database " + path_ + " has schema version " + std::to_string(have) + ", not this emadiag's " +
                                   std::to_string(newest) + "; a command that only reads does not migrate it (import into it, "
                                   "or a writable copy of it, once)",
