@@ -79,8 +79,9 @@ public:
     /// file this process has just checked or created.
     /// ReadOnly (for the commands that only read: report, trend, fleet, verify, export) opens an
     /// existing file with SQLITE_OPEN_READONLY, so a database on read-only media or without write
-    /// permission can be read; it never creates or migrates (an older schema is DbError) and is checked
-    /// as a writable one is.
+    /// permission can be read; it never creates a file, and is checked as a writable one is. An older
+    /// schema is migrated first by a read-write connection of its own where the file can be written,
+    /// else DbError naming both versions.
     enum class Access { ReadWrite, ReadOnly };
     explicit Database(const std::string& path, int busy_timeout_ms = kDefaultBusyTimeoutMs, bool quick_check = true,
                       Access access = Access::ReadWrite);
