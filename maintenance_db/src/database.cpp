@@ -8,6 +8,7 @@
 #include "schema_sql.hpp"
 
 #include <sqlite3.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -68,7 +69,8 @@ void throw_sqlite_error(Database& db, int rc, const std::string& what) {
 }
 }  // namespace detail
 
-Database::Database(const std::string& path, int busy_timeout_ms, bool quick_check) : path_(path), busy_timeout_ms_(busy_timeout_ms) {
+Database::Database(const std::string& path, int busy_timeout_ms, bool quick_check, Access access)
+    : path_(path), busy_timeout_ms_(busy_timeout_ms), access_(access) {
     const bool in_memory = path == ":memory:" || path.empty();
     if (!in_memory) anchor_path_ = path + ".anchor";
     if (!in_memory) {
@@ -79,7 +81,19 @@ Database::Database(const std::string& path, int busy_timeout_ms, bool quick_chec
                               " is a URI: this command works on a station's SQLite file only (give its path; the fleet server is read by "
                               "report, trend and fleet, and written by sync --to)",
                           DbErrorKind::Invalid);
-        if (const auto problem = io::output_path_problem(path, "maintenance database")) throw DbError(*problem);
+    }
+    const bool read_only = access == Access::ReadOnly;
+    if (!in_memory && read_only) {
+        std::error_code ec;
+        const auto st = std::filesystem::status(path, ec);
+        if (!std::filesystem::exists(st)) throw DbError("database " + path + " does not exist", DbErrorKind::Other);
+        if (std::filesystem::is_directory(st))
+            throw DbError("database " + path + " is a directory, not a database file", DbErrorKind::Other);
+        if (!std::filesystem::is_regular_file(st))
+            throw DbError("database " + path + " is not a regular file (a device, FIFO or socket)", DbErrorKind::Other);
+    }
+    if (!in_memory) {
+        if (const auto problem = read_only ? std::nullopt : io::output_path_problem(path, "maintenance database")) throw DbError(*problem);
         // The header first: a file that is not SQLite's is refused before SQLite touches it.
         std::ifstream in(path, std::ios::binary);
         if (in) {
@@ -100,7 +114,8 @@ Database::Database(const std::string& path, int busy_timeout_ms, bool quick_chec
     (void)kMemStatusOff;
     // A connection belongs to one Database object, used by one thread at a time (never shared
     // between threads): no per-call connection mutex (SQLite's multi-thread mode).
-    const int rc = sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_NOMUTEX, nullptr);
+    const int flags = read_only ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE;
+    const int rc = sqlite3_open_v2(path.c_str(), &db_, flags | SQLITE_OPEN_NOMUTEX, nullptr);
     if (rc != SQLITE_OK) {
         const std::string msg = db_ != nullptr ? sqlite3_errmsg(db_) : sqlite3_errstr(rc);
         sqlite3_close(db_);
@@ -114,8 +129,29 @@ Database::Database(const std::string& path, int busy_timeout_ms, bool quick_chec
         exec("PRAGMA cell_size_check = ON");
         if (!in_memory && quick_check) check_before_write();
         // Off while migrating: version 3 rebuilds test_sessions, which other tables reference.
-        exec("PRAGMA foreign_keys = OFF");
-        migrate();
+        if (read_only) {
+            const int have = schema_version(), newest = static_cast<int>(std::size(kSchemaMigrations));
+            if (have < newest && ::access(path_.c_str(), W_OK) == 0) {
+                // An older file on writable storage is migrated first, as every command did before,
+                // by a connection of its own; this one then reads the migrated file.
+                cache_.clear();
+                sqlite3_close(db_);
+                db_ = nullptr;
+                { Database migrating(path_, busy_timeout_ms, false, Access::ReadWrite); }
+                const int again = sqlite3_open_v2(path_.c_str(), &db_, SQLITE_OPEN_READONLY | SQLITE_OPEN_NOMUTEX, nullptr);
+                if (again != SQLITE_OK) throw DbError("cannot open database " + path_ + ": " + sqlite3_errstr(again), kind_of(again));
+                sqlite3_busy_timeout(db_, busy_timeout_ms);
+                exec("PRAGMA cell_size_check = ON");
+            } else if (have != newest) {
+                throw DbError("database " + path_ + " has schema version " + std::to_string(have) + ", not this emadiag's " +
+                                  std::to_string(newest) + "; a command that only reads does not migrate it (import into it, "
+                                  "or a writable copy of it, once)",
+                              DbErrorKind::Other);
+            }
+        } else {
+            exec("PRAGMA foreign_keys = OFF");
+            migrate();
+        }
         exec("PRAGMA foreign_keys = ON");
         // A session's transaction (or a bulk import's) stays in memory until COMMIT: without room
         // SQLite spills pages to the file mid-transaction, syncing the journal each time.
@@ -146,7 +182,7 @@ std::string Database::error_text() const { return std::string(sqlite3_errmsg(db_
 void Database::check_before_write() {
     // SQLite opens a file it may not write read-only without an error; every write would then fail
     // half-way through a command. Refuse it here, before anything is done.
-    if (sqlite3_db_readonly(db_, "main") == 1) {
+    if (access_ == Access::ReadWrite && sqlite3_db_readonly(db_, "main") == 1) {
         throw DbError("database " + path_ + " is read-only (no write permission on the file or its medium); " +
                           "emadiag needs to write to it: copy it to a writable place or fix the permissions",
                       DbErrorKind::ReadOnly);

@@ -1,5 +1,6 @@
 // emadiag dataset: simulated runs with random health parameters for training the paper's network.
 #include "cli/command.hpp"
+#include "cli/numeric_option.hpp"
 #include "core/emadiag_error.hpp"
 #include "emadiag/io/output_path.hpp"
 #include "emadiag/io/text_field.hpp"
@@ -27,6 +28,8 @@ struct DatasetOptions {
 };
 
 constexpr int kProgressBarWidth = 40;
+/// Most simulation threads asked for (the batched path runs one group per thread).
+constexpr unsigned kMaxSimulationThreads = 1024;
 
 void draw_progress(int simulated, int accepted, int wanted) {
     const double f = std::min(1.0, static_cast<double>(accepted) / std::max(1, wanted));
@@ -42,11 +45,13 @@ const bool registered = register_command(Command{
         auto o = std::make_shared<DatasetOptions>();
         sub.add_option("--case", o->load_case, "Load case: A, A-ext or B")->default_val("B");
         sub.add_option("--sequence", o->sequence, "Sequence: dyn, brk or sweep")->default_val("dyn");
-        sub.add_option("--count", o->count, "Runs that pass the bad-simulation filter")->required()->check(CLI::PositiveNumber);
+        sub.add_option("--count", o->count, "Runs that pass the bad-simulation filter")->required()
+            ->check(in_range(1, kMaxDatasetCount, "kMaxDatasetCount"));
         sub.add_option("--seed", o->seed, "Seed of the health parameters and the noise")->default_val(1);
         sub.add_option("--noise", o->noise, "Noise profile: none or typical")->default_val("none");
         sub.add_option("--out", o->out, "Output dataset file (docs/dataset-format.md)")->required();
-        sub.add_option("--threads", o->threads, "Simulation threads (default: all cores)");
+        sub.add_option("--threads", o->threads, "Simulation threads (default: all cores)")
+            ->check(in_range(0u, kMaxSimulationThreads, "kMaxSimulationThreads"));
         return [o] {
             // Checked before the simulations (minutes), not only when the file is written.
             if (const auto problem = io::output_path_problem(o->out, "dataset")) throw EmadiagError(*problem);

@@ -54,6 +54,7 @@ void print_errors(std::ostream& os, const char* label, const discovery::ErrorMet
 
 void print_text(std::ostream& os, const std::string& path, const discovery::DiscoveryReport& r) {
     os << "run " << path << ": case " << r.load_case << ", sequence " << r.sequence << ", " << r.samples << " samples\n";
+    if (const std::string window = r.analysis_text(); !window.empty()) os << window << '\n';  // a long run's cost, stated
     os << "baseline model: " << discovery::kModelBase << " with\n";
     for (const auto& h : r.baseline_health) {
         os << "  " << std::left << std::setw(7) << h.name << fmt(h.value, 6) << " (" << h.source;

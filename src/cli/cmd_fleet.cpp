@@ -4,6 +4,7 @@
 // last verdict) with the parameter that drives it. Read from the summary tables, so it takes about
 // the same time for a year of one aircraft as for a fleet's.
 #include "cli/command.hpp"
+#include "cli/numeric_option.hpp"
 #include "cli/db_source.hpp"
 #include "cli/output_file.hpp"
 
@@ -15,6 +16,9 @@
 
 namespace emadiag::cli {
 namespace {
+
+/// A crossing horizon of less than one flight cycle predicts nothing.
+constexpr double kMinHorizonCycles = 1.0;
 
 namespace pg = emadiag::prognostics;
 
@@ -105,7 +109,8 @@ const bool registered = register_command(Command{
         sub.add_option("--draws", o->fleet.rul.draws, "Monte Carlo draws per RUL interval")->capture_default_str();
         sub.add_option("--seed", o->fleet.rul.seed, "Seed of the Monte Carlo draws")->capture_default_str();
         sub.add_option("--horizon-days", o->fleet.rul.horizon_days, "Crossing horizon, days")->capture_default_str();
-        sub.add_option("--horizon-cycles", o->fleet.horizon_cycles, "Crossing horizon, flight cycles")->capture_default_str();
+        sub.add_option("--horizon-cycles", o->fleet.horizon_cycles, "Crossing horizon, flight cycles")->capture_default_str()
+            ->check(in_range(kMinHorizonCycles, prognostics::kMaxHorizonDays, "kMinHorizonCycles, kMaxHorizonDays"));
         return [o] {
             db::OpenedSource database = db::open_record_source(o->db);
             const auto rows = pg::build_fleet_view(*database.source, o->fleet);

@@ -92,6 +92,40 @@ void check(const HistorySimOptions& o) {
         throw EmadiagError("--phase \"" + o.phase + "\": expected pre-flight or post-flight");
 }
 
+/// The whole plan, checked before anything is simulated or stored (issue 21 item 14): every
+/// session's cycles (with overflow checks) and hours, and its true FDJ and FSJ. A plan that fails
+/// at session 7 is refused before session 1, never half stored.
+void check_plan(const HistorySimOptions& o) {
+    const std::int64_t first_cycles = o.record.cycles.value_or(0);
+    for (int i = 0; i < o.sessions; ++i) {
+        const double t_days = i * o.days_between;
+        const std::string where = "session " + std::to_string(i + 1) + " of " + std::to_string(o.sessions) + " (day " + num(t_days) + "): ";
+        if (o.cycles_per_day > 0 || o.record.cycles) {
+            const double flown = o.cycles_per_day * t_days;
+            std::int64_t cycles = 0;
+            if (!(flown <= static_cast<double>(kMaxFlightCycles)) ||
+                __builtin_add_overflow(first_cycles, static_cast<std::int64_t>(std::llround(flown)), &cycles) || cycles > kMaxFlightCycles) {
+                throw EmadiagError(where + "cycles " + std::to_string(first_cycles) + " + " + num(flown, 12) +
+                                   " flown exceed the limit kMaxFlightCycles = " + std::to_string(kMaxFlightCycles) + "; nothing was stored");
+            }
+            const double hours = static_cast<double>(cycles) * o.hours_per_cycle;
+            if (!(hours <= kMaxFlightHours)) {
+                throw EmadiagError(where + "hours " + num(hours, 12) + " exceed the limit kMaxFlightHours = " + num(kMaxFlightHours, 12) +
+                                   "; nothing was stored");
+            }
+        }
+        sim::EmaParams p = sim::SimConfig{}.params;  // as the session loop builds it
+        p.fdj_nm = o.fdj_start_nm + o.fdj_rate_nm_per_100d * t_days / kRatePeriodDays;
+        p.fsj_nm = o.fsj_start_nm + o.fsj_rate_nm_per_100d * t_days / kRatePeriodDays;
+        try {
+            p.validate();
+        } catch (const std::exception& e) {
+            throw EmadiagError(where + "true FDJ " + num(p.fdj_nm) + " N m, FSJ " + num(p.fsj_nm) + " N m: " + e.what() +
+                               "; nothing was stored");
+        }
+    }
+}
+
 const bool registered = register_command(Command{
     "history-sim", "Simulated maintenance history of one aircraft (ground routine per session, drifting friction) for emadiag trend",
     [](CLI::App& sub) -> std::function<int()> {
@@ -121,6 +155,7 @@ const bool registered = register_command(Command{
             db::check_tail_number(o->tail);
             if (!(o->cycles_per_day >= 0) || !(o->hours_per_cycle >= 0))
                 throw EmadiagError("--cycles-per-day and --hours-per-cycle must be >= 0");
+            check_plan(*o);
             db::StoredTestSession checked;
             set_record_info(checked, o->record);  // an unknown position is an error before anything is simulated
             const std::string serial =

@@ -20,6 +20,8 @@
 #include "estimation/run_estimator.hpp"
 #include "prognostics/utc_time.hpp"
 
+#include <cstdint>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -41,12 +43,35 @@ struct ImportOptions {
     SessionRecordInfo record;
 };
 
+/// Largest run file import stores byte for byte: a run CSV at the reader's limit (kCsvMaxValues,
+/// 2 million rows of six columns) is about 150 MB.
+constexpr std::uint64_t kMaxImportFileBytes = std::uint64_t{256} << 20;
+
+/// The file's bytes, read in chunks; a file larger than kMaxImportFileBytes is refused by its size
+/// before anything is read (and if it grows while read), and only a regular file is read.
 std::string read_bytes(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
+    std::ifstream in;
+    std::error_code ec;
+    const auto status = std::filesystem::status(path, ec);
+    if (ec || !std::filesystem::is_regular_file(status)) throw EmadiagError(path + ": the run file is not a regular file");
+    const auto too_large = [&](std::uint64_t size) {
+        return EmadiagError(path + ": the run file has " + std::to_string(size) + " bytes, more than the limit kMaxImportFileBytes = " +
+                            std::to_string(kMaxImportFileBytes));
+    };
+    const std::uint64_t size = std::filesystem::file_size(path, ec);
+    if (ec) throw EmadiagError(path + ": cannot read the run file: " + ec.message());
+    if (size > kMaxImportFileBytes) throw too_large(size);
+    in.open(path, std::ios::binary);
     if (!in) throw EmadiagError(path + ": cannot read the run file");
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
+    std::string bytes;
+    bytes.reserve(size);
+    char buf[65536];
+    while (in.read(buf, sizeof buf) || in.gcount() > 0) {
+        bytes.append(buf, static_cast<std::size_t>(in.gcount()));
+        if (bytes.size() > kMaxImportFileBytes) throw too_large(bytes.size());
+    }
+    if (in.bad()) throw EmadiagError(path + ": read error on the run file");
+    return bytes;
 }
 
 const bool registered = register_command(Command{

@@ -7,6 +7,7 @@
 // same record, per position.) HTML is one self-contained file written by the rendering module
 // (report/record_adapter.hpp, report/html_report.hpp, docs/report-html.md).
 #include "cli/command.hpp"
+#include "cli/numeric_option.hpp"
 #include "cli/db_source.hpp"
 #include "cli/output_file.hpp"
 
@@ -25,6 +26,9 @@
 
 namespace emadiag::cli {
 namespace {
+
+/// A crossing horizon of less than one flight cycle predicts nothing.
+constexpr double kMinHorizonCycles = 1.0;
 
 namespace pg = emadiag::prognostics;
 
@@ -176,7 +180,8 @@ const bool registered = register_command(Command{
         sub.add_option("--phase", o->record.phase, "Sessions of this phase in the trends: all, pre-flight, post-flight, in-flight, load-rig")
             ->capture_default_str();
         sub.add_option("--horizon-days", o->record.rul.horizon_days, "Crossing horizon after the last session, days")->capture_default_str();
-        sub.add_option("--horizon-cycles", o->record.horizon_cycles, "Crossing horizon after the last session, flight cycles")->capture_default_str();
+        sub.add_option("--horizon-cycles", o->record.horizon_cycles, "Crossing horizon after the last session, flight cycles")->capture_default_str()
+            ->check(in_range(kMinHorizonCycles, prognostics::kMaxHorizonDays, "kMinHorizonCycles, kMaxHorizonDays"));
         sub.add_option("--draws", o->record.rul.draws, "Monte Carlo draws for the RUL intervals")->capture_default_str();
         sub.add_option("--seed", o->record.rul.seed, "Seed of the Monte Carlo draws (recorded in the report)")->capture_default_str();
         return [o] {

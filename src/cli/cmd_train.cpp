@@ -1,5 +1,6 @@
 // emadiag train: trains the paper's network (section 2.8) with SCG on a dataset and writes the model JSON.
 #include "cli/command.hpp"
+#include "cli/numeric_option.hpp"
 #include "core/emadiag_error.hpp"
 #include "emadiag/io/output_path.hpp"
 #include "emadiag/io/text_field.hpp"
@@ -8,6 +9,7 @@
 
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <sstream>
 #include <thread>
@@ -31,6 +33,9 @@ struct TrainCliOptions {
     std::string resample = "linear";
 };
 
+/// The initial weights are seeded with seed + 1, which must not wrap.
+constexpr std::uint64_t kMaxTrainSeed = std::numeric_limits<std::uint64_t>::max() - 1;
+
 std::vector<std::string> default_outputs(const std::string& load_case) {
     // The paper: case A predicts FDJ only (3.2); A-ext and B predict FDJ and eta_O (3.3, 3.4).
     if (load_case == "A") return {kParamFdj};
@@ -53,23 +58,30 @@ const bool registered = register_command(Command{
         auto o = std::make_shared<TrainCliOptions>();
         sub.add_option("--dataset", o->dataset, "Dataset file from `emadiag dataset`")->required();
         sub.add_option("--out", o->out, "Model JSON to write")->required();
-        sub.add_option("--timesteps", o->timesteps, "Timesteps N of the resampled T_R")->default_val(500);
-        sub.add_option("--runs", o->runs, "Use the first N runs of the dataset (0: all)")->default_val(0);
-        sub.add_option("--neurons", o->neurons, "Hidden tansig neurons")->default_val(50);
+        sub.add_option("--timesteps", o->timesteps, "Timesteps N of the resampled T_R")->default_val(500)
+            ->check(in_range(kMinTimesteps, kMaxTimesteps, "kMinTimesteps, kMaxTimesteps"));
+        sub.add_option("--runs", o->runs, "Use the first N runs of the dataset (0: all)")->default_val(0)
+            ->check(in_range(0, std::numeric_limits<int>::max()));
+        sub.add_option("--neurons", o->neurons, "Hidden tansig neurons")->default_val(50)
+            ->check(in_range(kMinHiddenNeurons, kMaxHiddenNeurons, "kMinHiddenNeurons, kMaxHiddenNeurons"));
         sub.add_option("--outputs", o->outputs, "Comma list of FDJ_Nm,FSJ_Nm,eta_O (default by case)");
         sub.add_flag("--with-speed", o->with_speed, "Also feed the resampled speed");
         sub.add_flag("--with-load", o->with_load, "Also feed the resampled load F_R = H / tau");
-        sub.add_option("--seed", o->seed, "Seed of the split and of the initial weights")->default_val(1);
-        sub.add_option("--max-epochs", o->max_epochs, "SCG epoch limit")->default_val(1000);
-        sub.add_option("--max-fail", o->max_fail, "Validation failures before stopping")->default_val(12);
+        sub.add_option("--seed", o->seed, "Seed of the split and of the initial weights")->default_val(1)
+            ->check(in_range<std::uint64_t>(0, kMaxTrainSeed, "the initial weights take seed + 1"));
+        sub.add_option("--max-epochs", o->max_epochs, "SCG epoch limit")->default_val(1000)
+            ->check(in_range(kMinEpochs, kMaxEpochs, "kMinEpochs, kMaxEpochs"));
+        sub.add_option("--max-fail", o->max_fail, "Validation failures before stopping")->default_val(12)
+            ->check(in_range(kMinMaxFail, kMaxMaxFail, "kMinMaxFail, kMaxMaxFail"));
         sub.add_option("--resample", o->resample, "linear (the paper) or mean (window means, for noisy runs)")
             ->default_val("linear")
             ->check(CLI::IsMember({"linear", "mean"}));
-        sub.add_option("--goal", o->goal, "Training MSE goal, normalised [0, 1] space (the paper: 1e-6)")->default_val(1e-6);
+        sub.add_option("--goal", o->goal, "Training MSE goal, normalised [0, 1] space (the paper: 1e-6)")->default_val(1e-6)
+            ->check(in_range(0.0, kMaxGoal, "kMaxGoal"));
         return [o] {
             // Checked before training (minutes), not only when the model is written.
             io::check_output_path<EmadiagError>(o->out, "network model", io::OutputInputs({o->dataset}));
-            const Dataset d = read_dataset(o->dataset);
+            const Dataset d = read_dataset(o->dataset);  // every sample finite, labels in range (dataset.hpp)
             TrainOptions t;
             t.spec.load_case = sim::to_string(d.spec.load_case);
             t.spec.sequence = sim::to_string(d.spec.sequence);
@@ -79,15 +91,12 @@ const bool registered = register_command(Command{
             t.spec.with_load = o->with_load;
             t.spec.resample = o->resample;
             t.spec.outputs = o->outputs.empty() ? default_outputs(t.spec.load_case) : split_list(o->outputs);
-            for (const auto& name : t.spec.outputs) {
-                if (name == kParamEtaA) throw EmadiagError("--outputs: predict eta_O; eta_A follows by eq. (4)");
-                (void)health_range(name);
-            }
             t.split_seed = o->seed;
             t.init_seed = o->seed + 1;
             t.scg.max_epochs = o->max_epochs;
             t.scg.max_fail = o->max_fail;
             t.scg.goal = o->goal;
+            check_train_options(t);  // --outputs: known names, none twice, not eta_A
             const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
             const FeatureSet f = build_features(d, t.spec, o->runs, threads);
             TrainReport rep = train_network(f, t);

@@ -282,7 +282,7 @@ const bool verify_registered = register_command(Command{
         return [o] {
             if (!o->expect_head.empty() && !is_head_hash(o->expect_head))
                 throw EmadiagError("--expect-head '" + o->expect_head + "' is not a head hash: give the 64 lowercase hex digits verify or export printed");
-            db::Database database(o->db);
+            db::Database database(o->db, db::Database::kDefaultBusyTimeoutMs, true, db::Database::Access::ReadOnly);
             if (!o->anchor.empty()) database.set_anchor_path(o->anchor);
             check_tail_known(database, o->tail);
             db::ChainCheck c = db::verify_tail(database, o->tail);
@@ -340,7 +340,7 @@ const bool export_registered = register_command(Command{
         sub.add_option("--out", o->out, "JSON: the file (default stdout); CSV: the directory (required)");
         sub.add_flag("--no-samples", o->no_samples, "Leave out the 2 kHz samples and raw logs (their hashes stay)");
         return [o] {
-            db::Database database(o->db);
+            db::Database database(o->db, db::Database::kDefaultBusyTimeoutMs, true, db::Database::Access::ReadOnly);
             check_tail_known(database, o->tail);
             if (o->format == "csv") {
                 if (o->out.empty()) throw EmadiagError("--format csv writes one file per table: give --out DIR");

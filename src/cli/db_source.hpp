@@ -26,7 +26,10 @@ inline CLI::Validator sqlite_file_or_fleet_uri() {
                 return {};
             }
             std::error_code ec;
-            if (!std::filesystem::is_regular_file(value, ec)) return "File does not exist: " + io::escape_text(value);
+            const auto st = std::filesystem::status(value, ec);
+            if (!std::filesystem::exists(st)) return "database file does not exist: " + io::escape_text(value);
+            if (std::filesystem::is_directory(st)) return io::escape_text(value) + " is a directory, not a database file";
+            if (!std::filesystem::is_regular_file(st)) return io::escape_text(value) + " is not a regular file (a device, FIFO or socket)";
             return {};
         },
         "FILE or postgresql://...");

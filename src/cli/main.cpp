@@ -6,6 +6,7 @@
 #include "emadiag/io/text_field.hpp"
 #include "emadiag/io/uri.hpp"
 #include "emadiag/can/ema_icd.hpp"
+#include "cli/numeric_option.hpp"
 
 #include <algorithm>
 #include <exception>
@@ -52,6 +53,7 @@ int main(int argc, char** argv) {
     }
     add_help_command(app, action);
     add_generate_docs_command(app, action);
+    check_every_number(app);  // one strict parser for every numeric option (numeric_option.hpp)
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -1,5 +1,7 @@
 #include "cli/sim_options.hpp"
 
+#include "cli/numeric_option.hpp"
+
 #include "emadiag/sim/sim_error.hpp"
 
 #include <stdexcept>
@@ -50,7 +52,19 @@ sim::SimConfig config_from(const SimulateOptions& o) {
         }
         c.params.effects.set(e.substr(0, eq), v);
     }
-    for (const auto& t : o.terms) c.params.terms.push_back(sim::parse_term(t));
+    if (o.terms.size() > kMaxTerms) {
+        throw sim::SimError("--term given " + std::to_string(o.terms.size()) + " times, more than the limit kMaxTerms = " +
+                            std::to_string(kMaxTerms));
+    }
+    for (const auto& t : o.terms) {
+        // The term grammar nests one function call deep; a longer text is refused before parsing, so
+        // the message stays short (it quotes at most kMaxQuotedOptionChars characters).
+        if (t.size() > kMaxTermChars) {
+            throw sim::SimError("--term " + quote_option_text(t) + " is longer than the limit kMaxTermChars = " +
+                                std::to_string(kMaxTermChars) + " characters");
+        }
+        c.params.terms.push_back(sim::parse_term(t));
+    }
     c.params.validate();
     c.load_case = sim::parse_load_case(o.load_case);
     c.sequence = sim::parse_sequence(o.sequence);

@@ -11,6 +11,10 @@
 
 namespace emadiag::cli {
 
+/// Longest --term text and most --term options (a term is one coefficient and a few factors).
+inline constexpr std::size_t kMaxTermChars = 256;
+inline constexpr std::size_t kMaxTerms = 64;
+
 struct SimulateOptions {
     std::string load_case = "B";
     std::string sequence = "dyn";

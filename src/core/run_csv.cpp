@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <fstream>
 #include <sstream>
+#include <string_view>
 
 namespace emadiag {
 namespace {
@@ -91,6 +92,18 @@ Run read_run_csv(std::istream& in, const std::string& name) {
     bool too_long = false;
     while (io::read_bounded_line(in, line, kCsvMaxLineBytes, too_long)) {
         ++line_no;
+        if (line_no == 1) {
+            // The encoding, from the first bytes: a UTF-8 byte order mark is skipped (the text after it
+            // is the same); UTF-16 (a spreadsheet's "Unicode text") is refused with the fix.
+            static constexpr std::string_view kUtf8Bom = "\xEF\xBB\xBF";
+            if (line.rfind(kUtf8Bom, 0) == 0) line.erase(0, kUtf8Bom.size());
+            const bool utf16_bom = line.rfind("\xFF\xFE", 0) == 0 || line.rfind("\xFE\xFF", 0) == 0;
+            if (utf16_bom || line.find('\0') != std::string::npos) {
+                throw EmadiagError("invalid run CSV: " + name + ": line 1 " +
+                                   (utf16_bom ? "starts with a UTF-16 byte order mark" : "holds NUL bytes") +
+                                   ": the file looks UTF-16 encoded; save it as UTF-8 or ASCII text (e.g. iconv -f UTF-16 -t UTF-8)");
+            }
+        }
         if (too_long) {
             problem(line_no, "line longer than the limit kCsvMaxLineBytes = " + std::to_string(kCsvMaxLineBytes) + " bytes");
             if (++bad_rows > kCsvMaxBadRows) break;

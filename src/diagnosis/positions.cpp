@@ -6,9 +6,17 @@
 
 #include <nlohmann/json.hpp>
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cctype>
+#include <cerrno>
+#include <cstdint>
 #include <cstdlib>
-#include <fstream>
-#include <sstream>
+#include <cstring>
+#include <optional>
+#include <string>
 
 namespace emadiag {
 namespace {
@@ -37,19 +45,65 @@ PositionList PositionList::defaults() {
     return l;
 }
 
+namespace {
+
+std::string read_positions_file(const std::string& path) {
+    // Opened without blocking (a FIFO would otherwise wait for a writer), then checked on the open
+    // descriptor: only a regular file of at most kMaxPositionsFileBytes is read, in bounded chunks.
+    const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) throw EmadiagError(path + ": cannot read the positions file: " + std::strerror(errno));
+    struct Closer {
+        int fd;
+        ~Closer() { ::close(fd); }
+    } closer{fd};
+    struct stat st {};
+    if (::fstat(fd, &st) != 0) throw EmadiagError(path + ": cannot read the positions file: " + std::strerror(errno));
+    if (!S_ISREG(st.st_mode)) throw EmadiagError(path + ": the positions file is not a regular file");
+    const auto too_large = [&] {
+        return EmadiagError(path + ": the positions file is larger than the limit kMaxPositionsFileBytes = " +
+                            std::to_string(kMaxPositionsFileBytes) + " bytes");
+    };
+    if (static_cast<std::uint64_t>(st.st_size) > kMaxPositionsFileBytes) throw too_large();
+    std::string text;
+    char buf[4096];
+    for (;;) {
+        const ssize_t n = ::read(fd, buf, sizeof buf);
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0) throw EmadiagError(path + ": read error on the positions file: " + std::strerror(errno));
+        if (n == 0) break;
+        text.append(buf, static_cast<std::size_t>(n));
+        if (text.size() > kMaxPositionsFileBytes) throw too_large();  // it grew while read
+    }
+    return text;
+}
+
+std::optional<std::string> description_problem(const std::string& d) {
+    if (d.size() > kMaxPositionDescriptionChars) {
+        return "description of " + std::to_string(d.size()) + " characters is longer than the limit kMaxPositionDescriptionChars = " +
+               std::to_string(kMaxPositionDescriptionChars);
+    }
+    for (const char c : d) {
+        if (std::iscntrl(static_cast<unsigned char>(c))) return std::string("description holds a control character");
+    }
+    return std::nullopt;
+}
+
+}  // namespace
+
 PositionList PositionList::load(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw EmadiagError(path + ": cannot read the positions file");
-    std::ostringstream text;
-    text << in.rdbuf();
+    const std::string text = read_positions_file(path);
     nlohmann::json j;
     try {
-        j = nlohmann::json::parse(text.str());
+        j = nlohmann::json::parse(text);
     } catch (const nlohmann::json::exception& e) {
         throw EmadiagError(path + ": not JSON: " + e.what());
     }
     if (!j.is_object() || !j.contains("positions") || !j["positions"].is_array() || j["positions"].empty())
         throw EmadiagError(path + ": expected {\"positions\": [{\"name\": ..., \"ata\": ..., \"description\": ...}, ...]} with at least one position");
+    if (j["positions"].size() > kMaxPositions) {
+        throw EmadiagError(path + ": " + std::to_string(j["positions"].size()) + " positions, more than the limit kMaxPositions = " +
+                           std::to_string(kMaxPositions));
+    }
     PositionList l;
     std::vector<std::string> problems;
     for (std::size_t i = 0; i < j["positions"].size(); ++i) {
@@ -59,7 +113,12 @@ PositionList PositionList::load(const std::string& path) {
             problems.push_back(where + "needs \"name\" and \"ata\" strings");
             continue;
         }
+        if (e.contains("description") && !e["description"].is_string()) {
+            problems.push_back(where + "\"description\" must be a string");
+            continue;
+        }
         Position p{e["name"].get<std::string>(), e["ata"].get<std::string>(), e.value("description", std::string{})};
+        if (const auto bad = description_problem(p.description)) problems.push_back(where + *bad);
         if (const auto bad = db::position_problem(p.name)) problems.push_back(where + *bad);
         if (const auto bad = db::ata_reference_problem(p.ata)) problems.push_back(where + *bad);
         for (const auto& q : l.positions)
@@ -72,7 +131,7 @@ PositionList PositionList::load(const std::string& path) {
         throw EmadiagError(msg);
     }
     l.source = path;
-    l.sha256 = db::sha256_hex(text.str());
+    l.sha256 = db::sha256_hex(text);
     return l;
 }
 

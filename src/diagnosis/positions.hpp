@@ -16,6 +16,13 @@ struct Position {
     std::string description;
 };
 
+/// Bounds of a positions file (issue 21 item 13): it must be a regular file of at most
+/// kMaxPositionsFileBytes (read in bounded chunks), with at most kMaxPositions positions whose
+/// descriptions are printable and at most kMaxPositionDescriptionChars long.
+inline constexpr std::size_t kMaxPositionsFileBytes = 64 * 1024;
+inline constexpr std::size_t kMaxPositions = 256;
+inline constexpr std::size_t kMaxPositionDescriptionChars = 120;
+
 /// The environment variable naming a positions file when --positions is not given.
 inline constexpr const char* kPositionsEnv = "EMADIAG_POSITIONS";
 

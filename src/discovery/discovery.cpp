@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <sstream>
 
 namespace emadiag::discovery {
 namespace {
@@ -901,7 +902,8 @@ nlohmann::json DiscoveryReport::to_json() const {
     nlohmann::json j;
     j["schema"] = "emadiag-discover";
     j["version"] = kModelJsonVersion;
-    j["run"] = {{"case", load_case}, {"sequence", sequence}, {"samples", samples}};
+    j["run"] = {{"case", load_case}, {"sequence", sequence}, {"samples", samples}, {"total_samples", total_samples}};
+    if (total_samples > samples) j["run"]["analysed"] = analysis_text();
     j["added_effects"] = added_effects();
     j["baseline_health"] = nlohmann::json::object();
     for (const auto& h : baseline_health) {
@@ -1051,12 +1053,46 @@ nlohmann::json DiscoveryReport::to_json() const {
     return j;
 }
 
+Run analysis_window(const Run& run, std::size_t max_samples) {
+    if (max_samples == 0) throw EmadiagError("discovery: the analysis window must hold at least one sample");
+    if (run.samples.size() <= max_samples) return run;
+    Run w;
+    w.load_case = run.load_case;
+    w.sequence = run.sequence;
+    w.constants = run.constants;
+    w.meta = run.meta;
+    // Field by field, so the long run's samples are not copied whole first.
+    w.samples.assign(run.samples.begin(), run.samples.begin() + static_cast<std::ptrdiff_t>(max_samples));
+    for (const auto& [name, values] : run.extra_columns) {
+        w.extra_columns.emplace_back(name, std::vector<double>(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(
+                                                                                    std::min(max_samples, values.size()))));
+    }
+    return w;
+}
+
+std::string DiscoveryReport::analysis_text() const {
+    if (total_samples <= samples) return "";
+    std::ostringstream os;
+    os << "analysed " << samples << " of " << total_samples << " samples in 1 window (the run's first " << samples
+       << " samples, t <= " << analysed_end_s << " s; limit kMaxAnalysedSamples = " << kMaxAnalysedSamples << ")";
+    return os.str();
+}
+
 DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
+    if (run.samples.size() > options.max_samples) {
+        // Bounded work (issue 21 item 12): the run's start, as re-simulations start from rest at t = 0.
+        DiscoveryReport windowed = discover(analysis_window(run, options.max_samples), options);
+        windowed.total_samples = run.samples.size();
+        windowed.notes.push_back(windowed.analysis_text());
+        return windowed;
+    }
     const RunSignals s = run_signals(run);
     DiscoveryReport rep;
     rep.load_case = run.load_case;
     rep.sequence = run.sequence;
     rep.samples = run.samples.size();
+    rep.total_samples = rep.samples;
+    rep.analysed_end_s = run.samples.empty() ? 0.0 : run.samples.back().t_s;
 
     // 1. Baseline: datasheet + the health the run identifies.
     const HealthEstimate est = estimate_physics(run);

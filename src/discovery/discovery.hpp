@@ -29,7 +29,19 @@ namespace emadiag::discovery {
 /// At most this many effects are added (the criterion usually stops earlier).
 inline constexpr int kMaxEffects = 3;
 
+/// Most samples of one run discovery analyses (issue 21 item 12): a longer run is analysed on its
+/// first kMaxAnalysedSamples samples (1 s at 2 kHz: a whole DYN run is 1000 samples, a BRK run 1600,
+/// so normal runs are analysed whole; the re-simulations start from rest at t = 0, so the window is
+/// the run's start), and the report says so (analysis_text). The re-simulations' cost grows with
+/// the samples analysed (a 4000-sample run took 52 s of CPU, docs/discovery.md), so this bounds the
+/// time and memory of any run within the run CSV's row limit.
+inline constexpr std::size_t kMaxAnalysedSamples = 2'000;
+
+/// The run's first `max_samples` samples (the whole run when it is not longer), with its metadata.
+[[nodiscard]] Run analysis_window(const Run& run, std::size_t max_samples = kMaxAnalysedSamples);
+
 struct DiscoveryOptions {
+    std::size_t max_samples = kMaxAnalysedSamples;  ///< a longer run is analysed on its first max_samples
     int max_effects = kMaxEffects;
     bool open_world = true;  ///< screen the generated term library and the sensor stage (issue 10)
 };
@@ -143,7 +155,11 @@ struct EfficiencyAlternative {
 
 struct DiscoveryReport {
     std::string load_case, sequence;
-    std::size_t samples = 0;
+    std::size_t samples = 0;         ///< samples analysed
+    std::size_t total_samples = 0;   ///< samples in the run (more than `samples` when it was windowed)
+    double analysed_end_s = 0;       ///< time of the last sample analysed
+    /// "" when the whole run was analysed; else "analysed 10000 of 2000000 samples in 1 window (t = ...)".
+    [[nodiscard]] std::string analysis_text() const;
     NoiseFloor floor;                            ///< the run's own noise floor (trajectory.hpp)
     std::vector<SensorFinding> sensor_findings;
     LowSpeedStage low_speed;                     ///< Stribeck friction found by the trajectory (library effect)

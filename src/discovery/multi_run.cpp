@@ -62,6 +62,16 @@ AcrossRunsReport discover_runs(const std::vector<Run>& runs, const std::vector<s
                                const DiscoveryOptions& options) {
     if (runs.size() != labels.size()) throw EmadiagError("discover_runs: runs and labels differ in number");
     AcrossRunsReport out;
+    // A run longer than options.max_samples is analysed on its first window, in every comparison
+    // (discover, breakaway_across, across_loads), as discover() analyses it alone.
+    std::vector<Run> windows;
+    windows.reserve(runs.size());
+    for (const auto& r : runs) {
+        windows.push_back(r.samples.size() > options.max_samples ? analysis_window(r, options.max_samples) : Run{});
+    }
+    const auto run_at = [&](std::size_t i) -> const Run& {
+        return runs[i].samples.size() > options.max_samples ? windows[i] : runs[i];
+    };
     std::vector<const Run*> analysed;
     std::vector<std::size_t> analysed_index;  // into `runs`
     std::vector<std::size_t> brk_runs;
@@ -71,9 +81,11 @@ AcrossRunsReport discover_runs(const std::vector<Run>& runs, const std::vector<s
             continue;
         }
         try {
-            out.reports.push_back(discover(runs[i], options));
+            out.reports.push_back(discover(run_at(i), options));
+            out.reports.back().total_samples = runs[i].samples.size();
+            if (runs[i].samples.size() > options.max_samples) out.reports.back().notes.push_back(out.reports.back().analysis_text());
             out.labels.push_back(labels[i]);
-            analysed.push_back(&runs[i]);
+            analysed.push_back(&run_at(i));
             analysed_index.push_back(i);
         } catch (const EmadiagError& e) {
             out.skipped.push_back(labels[i] + ": " + e.what());
@@ -92,7 +104,7 @@ AcrossRunsReport discover_runs(const std::vector<Run>& runs, const std::vector<s
             const auto dist = [&](std::size_t i) { return i > b ? i - b : b - i; };
             if (dist(analysed_index[k]) < dist(analysed_index[pick])) pick = k;
         }
-        out.breakaways.push_back(breakaway_across(runs[b], labels[b], *analysed[pick], out.labels[pick], out.reports[pick]));
+        out.breakaways.push_back(breakaway_across(run_at(b), labels[b], *analysed[pick], out.labels[pick], out.reports[pick]));
     }
     if (out.reports.empty()) {
         std::string why;

@@ -29,6 +29,8 @@ constexpr char kMagic[8] = {'E', 'M', 'A', 'D', 'S', 'E', 'T', '1'};
 constexpr int kFormatVersion = 1;
 constexpr int kColumns = 6;
 constexpr int kLabelCount = 4;
+constexpr const char* kColumnNames[kColumns] = {"t_s", "current_A", "speed_rad_s", "theta_m_rad", "hinge_moment_Nm", "command_deg"};
+constexpr const char* kLabelNames[kLabelCount] = {kParamFdj, kParamFsj, kParamEtaO, kParamEtaA};
 constexpr double kNominalFdjNm = 0.08;
 constexpr double kNominalFsjNm = 0.12;
 constexpr double kNominalEtaA = 0.823788;
@@ -130,7 +132,10 @@ Dataset Dataset::with_noise(sim::NoiseProfile noise) const {
 }
 
 Dataset generate_dataset(const DatasetSpec& spec, unsigned threads, const DatasetProgress& progress) {
-    if (spec.count < 1) throw EmadiagError("dataset count " + std::to_string(spec.count) + " must be at least 1");
+    if (spec.count < 1 || spec.count > kMaxDatasetCount) {
+        throw EmadiagError("dataset count " + std::to_string(spec.count) + " is outside [1, " + std::to_string(kMaxDatasetCount) +
+                           "] (kMaxDatasetCount)");
+    }
     threads = std::max(1u, threads);
     const sim::EmaParams datasheet = sim::EmaParams::datasheet();
     Dataset d;
@@ -207,8 +212,8 @@ void write_dataset(const std::string& path, const Dataset& dataset) {
         {"count", dataset.spec.count},
         {"runs", dataset.runs.size()},
         {"samples_per_run", samples_per_run},
-        {"columns", {"t_s", "current_A", "speed_rad_s", "theta_m_rad", "hinge_moment_Nm", "command_deg"}},
-        {"labels", {kParamFdj, kParamFsj, kParamEtaO, kParamEtaA}},
+        {"columns", kColumnNames},
+        {"labels", kLabelNames},
         {"constants",
          {{"k_t_Nm_per_A", dataset.constants.k_t_nm_per_a},
           {"J_kgm2", dataset.constants.j_kgm2},
@@ -301,6 +306,21 @@ Dataset read_dataset(std::istream& in, const std::string& path) {
     } catch (const sim::SimError& e) {
         throw EmadiagError(path + ": bad header: " + e.what());
     }
+    if (samples_per_run < kMinDatasetSamplesPerRun) {
+        throw EmadiagError(path + ": header samples_per_run " + std::to_string(samples_per_run) +
+                           " is below the limit kMinDatasetSamplesPerRun = " + std::to_string(kMinDatasetSamplesPerRun));
+    }
+    {
+        const std::pair<const char*, double> constants[] = {{"k_t_Nm_per_A", d.constants.k_t_nm_per_a},
+                                                            {"J_kgm2", d.constants.j_kgm2},
+                                                            {"tau", d.constants.tau},
+                                                            {"sample_period_s", d.constants.sample_period_s}};
+        for (const auto& [name, value] : constants) {
+            if (!(std::isfinite(value) && value > 0)) {
+                throw EmadiagError(path + ": header constant " + name + " = " + format_exact(value) + " is not a finite number > 0");
+            }
+        }
+    }
     if (samples_per_run > kMaxDatasetSamplesPerRun) {
         throw EmadiagError(path + ": header samples_per_run " + std::to_string(samples_per_run) +
                            " exceeds the limit kMaxDatasetSamplesPerRun = " + std::to_string(kMaxDatasetSamplesPerRun));
@@ -327,10 +347,32 @@ Dataset read_dataset(std::istream& in, const std::string& path) {
         if (!in) {
             throw EmadiagError(path + ": truncated at run " + std::to_string(i) + " of " + std::to_string(runs));
         }
+        // Checked as loaded (issue 21 item 11), so training never sees a value it cannot use.
+        const std::string where = path + ": run " + std::to_string(i) + ": ";
+        for (std::size_t l = 0; l < kLabelCount; ++l) {
+            const HealthRange range = health_range(kLabelNames[l]);
+            const double slack = kLabelRangeTolerance * (range.hi - range.lo);
+            if (!(labels[l] >= range.lo - slack && labels[l] <= range.hi + slack)) {
+                throw EmadiagError(where + "label " + kLabelNames[l] + " = " + format_exact(labels[l]) +
+                                   " is outside the datasheet's range [" + format_exact(range.lo) + ", " +
+                                   format_exact(range.hi) + "] (ema-reference.md section 8)");
+            }
+        }
         r.labels = HealthLabels{labels[0], labels[1], labels[2], labels[3]};
         r.samples.resize(samples_per_run);
         for (std::size_t k = 0; k < samples_per_run; ++k) {
             const double* v = &row[kColumns * k];
+            for (std::size_t c = 0; c < kColumns; ++c) {
+                if (!std::isfinite(v[c])) {
+                    throw EmadiagError(where + "sample " + std::to_string(k) + ": " + kColumnNames[c] + " = " +
+                                       format_exact(v[c]) + " is not finite");
+                }
+            }
+            if (k > 0 && !(v[0] > row[kColumns * (k - 1)])) {
+                throw EmadiagError(where + "sample " + std::to_string(k) + ": t_s = " + format_exact(v[0]) +
+                                   " does not increase (sample " + std::to_string(k - 1) + ": " +
+                                   format_exact(row[kColumns * (k - 1)]) + ")");
+            }
             r.samples[k] = sim::Sample{v[0], v[1], v[2], v[3], v[4], v[5]};
         }
     }

@@ -99,6 +99,9 @@ using DatasetProgress = std::function<void(int simulated, int accepted, int want
 
 /// Largest number of simulations tried per accepted run wanted before giving up.
 inline constexpr int kMaxSimulationsPerRun = 2;
+/// Most runs a dataset is generated with (held in memory while simulated: a DYN run of case B is
+/// about 1 MB, so this is about the kMaxDatasetBytes a dataset file may hold).
+inline constexpr int kMaxDatasetCount = 16'000;
 
 /// Simulates until spec.count runs pass the filter (at most kMaxSimulationsPerRun * count
 /// simulations; throws EmadiagError naming the counts when too few pass). threads: simulate_batch.
@@ -112,6 +115,11 @@ void write_dataset(const std::string& path, const Dataset& dataset);
 [[nodiscard]] Dataset read_dataset(std::istream& in, const std::string& name);
 /// Limits of read_dataset (docs/limits.md): samples per run, and bytes of the whole body.
 inline constexpr std::size_t kMaxDatasetSamplesPerRun = 1'000'000;
+/// Fewest samples per run read_dataset accepts: eq. (7)'s central difference needs a sample on each
+/// side of one. Each run is also checked as it is read: every sample finite, t_s increasing, and
+/// every label inside its health_range (with kLabelRangeTolerance of the range's width for rounding).
+inline constexpr std::size_t kMinDatasetSamplesPerRun = 3;
+inline constexpr double kLabelRangeTolerance = 1e-9;
 inline constexpr std::uint64_t kMaxDatasetBytes = std::uint64_t{16} << 30;
 
 /// Seeded shuffle split of n items into train/validation/test index lists (the paper's 75/15/10).

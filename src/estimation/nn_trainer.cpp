@@ -8,11 +8,14 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <exception>
+#include <set>
 #include <thread>
 
 namespace emadiag {
 namespace {
 
+constexpr const char* kErrorPrefix = "[emadiag] ";
 constexpr int kMinRunsForSplit = 10;  // at least one test run and one validation run
 
 Eigen::MatrixXd columns(const Eigen::MatrixXd& m, const std::vector<int>& idx) {
@@ -23,9 +26,62 @@ Eigen::MatrixXd columns(const Eigen::MatrixXd& m, const std::vector<int>& idx) {
 
 Eigen::MatrixXd to_internal_space(const Eigen::MatrixXd& u) { return (2.0 * u.array() - 1.0).matrix(); }
 
+void check_int(const char* name, int value, int lo, int hi, const char* lo_name, const char* hi_name) {
+    if (value < lo || value > hi) {
+        throw EmadiagError(std::string(name) + " " + std::to_string(value) + " is outside [" + std::to_string(lo) + ", " +
+                           std::to_string(hi) + "] (" + lo_name + ", " + hi_name + ")");
+    }
+}
+
+void check_spec(const NetworkSpec& spec) {
+    check_int("timesteps", spec.timesteps, kMinTimesteps, kMaxTimesteps, "kMinTimesteps", "kMaxTimesteps");
+    check_int("hidden neurons", spec.hidden_neurons, kMinHiddenNeurons, kMaxHiddenNeurons, "kMinHiddenNeurons",
+              "kMaxHiddenNeurons");
+    if (spec.resample != "linear" && spec.resample != "mean") {
+        throw EmadiagError("resample '" + spec.resample + "' is not 'linear' or 'mean'");
+    }
+    if (spec.outputs.empty()) throw EmadiagError("outputs: the network needs at least one output");
+    std::set<std::string> seen;
+    for (const auto& name : spec.outputs) {
+        if (name == kParamEtaA) throw EmadiagError("outputs: predict eta_O; eta_A follows by eq. (4)");
+        (void)health_range(name);  // throws on an unknown name
+        if (!seen.insert(name).second) throw EmadiagError("outputs: " + name + " is listed twice");
+    }
+}
+
+template <class Dense>
+void check_finite(std::string& first, const std::string& field, const Dense& m) {
+    for (Eigen::Index i = 0; first.empty() && i < m.size(); ++i) {
+        if (!std::isfinite(m.data()[i])) first = field + "[" + std::to_string(i) + "] = " + std::to_string(m.data()[i]);
+    }
+}
+
 }  // namespace
 
+void check_train_options(const TrainOptions& options) {
+    check_spec(options.spec);
+    check_int("max epochs", options.scg.max_epochs, kMinEpochs, kMaxEpochs, "kMinEpochs", "kMaxEpochs");
+    check_int("max fail", options.scg.max_fail, kMinMaxFail, kMaxMaxFail, "kMinMaxFail", "kMaxMaxFail");
+    if (!(options.scg.goal >= 0 && options.scg.goal <= kMaxGoal)) {
+        throw EmadiagError("goal " + std::to_string(options.scg.goal) + " is not a number in [0, " + std::to_string(kMaxGoal) +
+                           "] (kMaxGoal: the normalised MSE)");
+    }
+}
+
+std::string non_finite_model_number(const NetworkModel& model) {
+    std::string first;
+    check_finite(first, "weights", model.network.flatten());
+    check_finite(first, "input_norm.min", model.input_norm.min);
+    check_finite(first, "input_norm.max", model.input_norm.max);
+    for (std::size_t k = 0; first.empty() && k < model.std_error_normalised.size(); ++k) {
+        const double v = model.std_error_normalised[k];
+        if (!std::isfinite(v)) first = "std_error_normalised[" + std::to_string(k) + "] = " + std::to_string(v);
+    }
+    return first;
+}
+
 FeatureSet build_features(const Dataset& dataset, const NetworkSpec& spec, int runs, unsigned threads) {
+    check_spec(spec);
     const int n = runs <= 0 ? static_cast<int>(dataset.runs.size()) : std::min(runs, static_cast<int>(dataset.runs.size()));
     if (runs > 0 && runs > static_cast<int>(dataset.runs.size())) {
         throw EmadiagError("asked for " + std::to_string(runs) + " runs, the dataset has " +
@@ -36,13 +92,25 @@ FeatureSet build_features(const Dataset& dataset, const NetworkSpec& spec, int r
     FeatureSet f;
     f.x.resize(spec.input_count(), n);
     f.u.resize(static_cast<Eigen::Index>(spec.outputs.size()), n);
-    const auto work = [&](int begin, int end) {
-        for (int i = begin; i < end; ++i) {
-            f.x.col(i) = network_features(dataset.run(static_cast<std::size_t>(i)), spec);
-            for (std::size_t o = 0; o < spec.outputs.size(); ++o) {
-                f.u(static_cast<Eigen::Index>(o), i) =
-                    ranges[o].normalise(dataset.runs[static_cast<std::size_t>(i)].labels.get(spec.outputs[o]));
+    // An exception in a worker is carried to the caller (std::exception_ptr) and rethrown after the
+    // join, naming the run: thrown out of a thread it would end the process (std::terminate).
+    std::vector<std::exception_ptr> failed(std::max(1u, threads));
+    const auto work = [&](unsigned slot, int begin, int end) {
+        int i = begin;
+        try {
+            for (; i < end; ++i) {
+                f.x.col(i) = network_features(dataset.run(static_cast<std::size_t>(i)), spec);
+                for (std::size_t o = 0; o < spec.outputs.size(); ++o) {
+                    f.u(static_cast<Eigen::Index>(o), i) =
+                        ranges[o].normalise(dataset.runs[static_cast<std::size_t>(i)].labels.get(spec.outputs[o]));
+                }
             }
+        } catch (const std::exception& e) {
+            std::string what = e.what();
+            if (what.rfind(kErrorPrefix, 0) == 0) what.erase(0, std::string(kErrorPrefix).size());
+            failed[slot] = std::make_exception_ptr(EmadiagError("network inputs of dataset run " + std::to_string(i) + ": " + what));
+        } catch (...) {
+            failed[slot] = std::current_exception();
         }
     };
     threads = std::max(1u, threads);
@@ -51,9 +119,12 @@ FeatureSet build_features(const Dataset& dataset, const NetworkSpec& spec, int r
     for (unsigned t = 0; t < threads; ++t) {
         const int b = static_cast<int>(t) * per;
         const int e = std::min(n, b + per);
-        if (b < e) pool.emplace_back(work, b, e);
+        if (b < e) pool.emplace_back(work, t, b, e);
     }
     for (auto& th : pool) th.join();
+    for (const auto& e : failed) {
+        if (e) std::rethrow_exception(e);  // the first failing block's (the lowest run index)
+    }
     return f;
 }
 
@@ -73,6 +144,7 @@ std::vector<double> calibrate_std_error(const Eigen::MatrixXd& residuals, double
 }
 
 TrainReport train_network(const FeatureSet& features, const TrainOptions& options) {
+    check_train_options(options);
     const auto n = static_cast<int>(features.x.cols());
     if (n < kMinRunsForSplit) {
         throw EmadiagError("training needs at least " + std::to_string(kMinRunsForSplit) + " runs, got " +
@@ -145,6 +217,10 @@ TrainReport train_network(const FeatureSet& features, const TrainOptions& option
         rep.mse.test_per_output.push_back(sq / static_cast<double>(rep.test_predicted.cols()));
     }
     rep.test_coverage95 = static_cast<double>(covered) / static_cast<double>(rep.test_predicted.size());
+    if (const std::string bad = non_finite_model_number(rep.model); !bad.empty()) {
+        throw EmadiagError("the trained model holds a non-finite number (" + bad +
+                           "); no model is written (are the dataset's samples and labels finite?)");
+    }
     rep.model.training = {{"runs", n},
                           {"split_seed", options.split_seed},
                           {"init_seed", options.init_seed},

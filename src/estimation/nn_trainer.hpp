@@ -10,6 +10,7 @@
 #include <Eigen/Dense>
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace emadiag {
@@ -49,6 +50,28 @@ struct TrainReport {
     /// Fraction of (test run, output) pairs whose 95 % interval covers the truth.
     double test_coverage95 = 0;
 };
+
+/// Bounds of the training options (issue 21 item 11), checked by check_train_options and used by
+/// `emadiag train`'s option checks. Resampling needs two points; the paper uses N = 500 and 50
+/// neurons; the upper bounds keep the weights (neurons x inputs) and the features (inputs x runs)
+/// within a few hundred MB.
+inline constexpr int kMinTimesteps = 2;
+inline constexpr int kMaxTimesteps = 10'000;
+inline constexpr int kMinHiddenNeurons = 1;
+inline constexpr int kMaxHiddenNeurons = 1'000;
+inline constexpr int kMinEpochs = 1;
+inline constexpr int kMaxEpochs = 1'000'000;
+inline constexpr int kMinMaxFail = 1;
+inline constexpr int kMaxMaxFail = 1'000'000;
+inline constexpr double kMaxGoal = 1.0;  ///< the MSE in the normalised [0, 1] space is at most 1
+
+/// Throws EmadiagError naming the option, its value and the bound: timesteps, hidden neurons,
+/// outputs (known names, no repeat, not eta_A), resample, epochs, max_fail and a finite goal.
+void check_train_options(const TrainOptions& options);
+
+/// The first non-finite number of a trained model ("std_error_normalised[0] = nan"), or "" when
+/// every number is finite: a model is written only when this is empty.
+[[nodiscard]] std::string non_finite_model_number(const NetworkModel& model);
 
 /// Quantile level used for the calibrated half-width: the 95 % two-sided interval.
 inline constexpr double kCoverageLevel = 0.95;  // half-width = kZ95 (health_estimate.hpp) std_error

@@ -540,7 +540,8 @@ OpenedSource open_record_source(const std::string& db) {
     if (is_fleet_uri(db)) {
         o.source = std::make_unique<PgRecordSource>(db);
     } else {
-        o.sqlite = std::make_unique<Database>(db);
+        // Reports only read: opened read-only, so a database on read-only media can be reported on.
+        o.sqlite = std::make_unique<Database>(db, Database::kDefaultBusyTimeoutMs, true, Database::Access::ReadOnly);
         o.source = std::make_unique<SqliteRecordSource>(*o.sqlite);
     }
     return o;

@@ -181,7 +181,10 @@ TEST(DatasetTest, TooFewAcceptedRunsIsAnErrorWithCounts) {
     DatasetSpec spec;
     spec.count = 0;
     EXPECT_THAT([&] { (void)generate_dataset(spec, 1); },
-                ThrowsMessage<std::runtime_error>(HasSubstr("dataset count 0 must be at least 1")));
+                ThrowsMessage<std::runtime_error>(HasSubstr("dataset count 0 is outside [1, 16000] (kMaxDatasetCount)")));
+    spec.count = kMaxDatasetCount + 1;  // before: kMaxSimulationsPerRun * count overflowed int ("only 0 of 0")
+    EXPECT_THAT([&] { (void)generate_dataset(spec, 1); },
+                ThrowsMessage<std::runtime_error>(HasSubstr("dataset count 16001 is outside [1, 16000]")));
 }
 
 }  // namespace

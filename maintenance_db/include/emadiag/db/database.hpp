@@ -77,7 +77,14 @@ public:
     /// and, with `quick_check`, the integrity check must pass (Full up to kFullCheckMaxBytes, else
     /// Open); otherwise DbError (kind Corrupt) and the file is left untouched. Skip it only for a
     /// file this process has just checked or created.
-    explicit Database(const std::string& path, int busy_timeout_ms = kDefaultBusyTimeoutMs, bool quick_check = true);
+    /// ReadOnly (for the commands that only read: report, trend, fleet, verify, export) opens an
+    /// existing file with SQLITE_OPEN_READONLY, so a database on read-only media or without write
+    /// permission can be read; it never creates a file, and is checked as a writable one is. An older
+    /// schema is migrated first by a read-write connection of its own where the file can be written,
+    /// else DbError naming both versions.
+    enum class Access { ReadWrite, ReadOnly };
+    explicit Database(const std::string& path, int busy_timeout_ms = kDefaultBusyTimeoutMs, bool quick_check = true,
+                      Access access = Access::ReadWrite);
     ~Database();
     Database(const Database&) = delete;
     Database& operator=(const Database&) = delete;
@@ -121,6 +128,7 @@ private:
     std::string path_;
     std::string anchor_path_;
     int busy_timeout_ms_ = kDefaultBusyTimeoutMs;
+    Access access_ = Access::ReadWrite;
     std::unordered_map<std::string, std::unique_ptr<Statement>> cache_;
     std::unordered_map<std::string, std::string> verified_heads_;
 };
