@@ -101,6 +101,11 @@ RunValidity run_validity(const Run& run) {
         const std::string why = run.meta_value("invalid_reason").value_or("");
         reasons.push_back("its metadata says valid=false" + (why.empty() ? std::string() : " (" + why + ")"));
     }
+    else if (const std::string why = run.meta_value("invalid_reason").value_or(""); !why.empty()) {
+        // The recorder and the session decoder write a reason only beside valid=false: a reason alone
+        // is metadata that contradicts itself, and the run is not judged on the better half of it.
+        reasons.push_back("its metadata gives invalid_reason=" + why + " (a valid run carries none)");
+    }
     const std::string status = run.meta_value("status").value_or("complete");
     if (status != "complete" && run.meta_value("invalid_reason").value_or("") != "sequence " + status)
         reasons.push_back("its metadata says status=" + status + ": the " + run.sequence + " sequence did not complete");

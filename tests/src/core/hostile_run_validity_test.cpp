@@ -94,6 +94,12 @@ TEST(HostileRunValidity, MetadataValidFalseOrAnIncompleteStatusIsNotValid) {
     run.set_meta("status", "complete");
     run.set_meta("valid", "true");
     EXPECT_TRUE(run_validity(run).valid);
+    // A reason without valid=false contradicts itself: not judged (the probe's csv-invalid-reason).
+    run = complete_run();
+    run.set_meta("invalid_reason", "telemetry loss");
+    const RunValidity v = run_validity(run);
+    EXPECT_FALSE(v.valid);
+    EXPECT_THAT(v.reason, HasSubstr("invalid_reason=telemetry loss"));
 }
 
 TEST(HostileRunValidity, AnImpossibleSampleMakesARunInvalid) {
