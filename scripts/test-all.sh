@@ -41,6 +41,7 @@ ctest --test-dir build -L unit -LE hostile -j "$(nproc)" --output-on-failure
 stage "the hostile-input suite (issue 21: output paths, control characters, concurrency, signals, size bounds, model and limit semantics)"
 ctest --test-dir build -L hostile -j "$(nproc)" --output-on-failure
 stage "the hostile probe (issue 21: every reproduction against the real binary, docs/hostile-probe.md)"
+rm -rf build/hostile-probe
 scripts/hostile/probe.sh "$PWD/build/src/emadiag" "$PWD/build/hostile-probe"
 stage "the HTML report in a real browser (headless Chromium)"
 ctest --test-dir build -L browser --output-on-failure
