@@ -132,7 +132,8 @@ TEST_F(HostileOutput, ReportTrendFleetAndExportRefuseDevicesFifosAndLinks) {
         EXPECT_EQ(slurp(p("victim.txt")), "precious\n") << cmd << " wrote through the link";
         EXPECT_TRUE(fs::is_symlink(p("link")));
     }
-    EXPECT_EQ(names(), (std::set<std::string>{"hh.db", "victim.txt", "link", "fifo"}));
+    // hh.db.anchor: the chain heads every store appends to (docs/record-format.md), not an output.
+    EXPECT_EQ(names(), (std::set<std::string>{"hh.db", "hh.db.anchor", "victim.txt", "link", "fifo"}));
 }
 
 TEST_F(HostileOutput, APlantedLinkAtTheOldTemporaryNameIsNotFollowed) {
@@ -143,7 +144,7 @@ TEST_F(HostileOutput, APlantedLinkAtTheOldTemporaryNameIsNotFollowed) {
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_EQ(slurp(p("victim.txt")), "precious\n");
     EXPECT_THAT(slurp(p("rep.txt")), HasSubstr("emadiag report: tail N100"));
-    EXPECT_EQ(names(), (std::set<std::string>{"hh.db", "victim.txt", "rep.txt.tmp", "rep.txt"})) << "a temporary file was left";
+    EXPECT_EQ(names(), (std::set<std::string>{"hh.db", "hh.db.anchor", "victim.txt", "rep.txt.tmp", "rep.txt"})) << "a temporary file was left";
 }
 
 TEST_F(HostileOutput, DiscoverRefusesItsInputAsOutputAndNeverBlocksOnAFifo) {
@@ -288,7 +289,9 @@ TEST_F(HostileOutput, StoredControlCharactersAreEscapedInReportAndFleet) {
             " technician_certificate = 'C' || char(13) || 'VERDICT: SERVICEABLE';");
     for (const std::string& cmd : std::vector<std::string>{"report --tail N100", "fleet", "report --tail N100 --format csv", "fleet --format csv"}) {
         const auto r = run_in(cmd + " --db " + db);
-        ASSERT_EQ(r.exit_code, 0) << cmd << ": " << r.output;
+        // The sessions were changed outside the tool: report says so and exits 5 (verify's code);
+        // fleet lists what is there. Either way every stored string is printed escaped.
+        ASSERT_EQ(r.exit_code, cmd.rfind("report", 0) == 0 ? 5 : 0) << cmd << ": " << r.output;
         EXPECT_EQ(lines_starting_with(r.output, "VERDICT"), 0) << cmd << " printed a forged line:\n" << r.output;
         EXPECT_EQ(r.output.find('\x1b'), std::string::npos) << cmd << " echoed an escape sequence";
         EXPECT_EQ(r.output.find('\r'), std::string::npos) << cmd;
