@@ -225,18 +225,7 @@ const bool registered = register_command(Command{
                     run.set_meta("phase", o->phase);
                     run.set_meta("history_sim_session", std::to_string(i + 1));
                     run.set_meta("history_sim_day", format_exact(t_days));
-                    AssessedRun a;
-                    a.sequence = sim::to_string(seq);
-                    a.valid = result.finite;
-                    if (!result.finite) a.invalid_reason = "the simulation diverged";
-                    if (a.valid) {
-                        try {
-                            a.estimates = estimate_run(run);
-                        } catch (const EmadiagError& e) {
-                            a.valid = false;
-                            a.invalid_reason = std::string("not estimated: ") + e.what();
-                        }
-                    }
+                    AssessedRun a = assess_run(run, sim::to_string(seq), result.finite, result.finite ? "" : "the simulation diverged");
                     db::StoredRun stored = to_stored_run(run, o->tail, started_utc, a.estimates);
                     std::ostringstream csv;  // a simulated run's raw record is its run CSV
                     write_run_csv(csv, run);

@@ -106,18 +106,7 @@ const bool registered = register_command(Command{
             // Only a complete, valid run gives a verdict (core/run_validity.hpp); any other is stored
             // with its samples and raw log, valid=false and the reason, and gives NO_TEST.
             const RunValidity validity = run_validity(run);
-            AssessedRun a;
-            a.sequence = run.sequence;
-            a.valid = validity.valid;
-            a.invalid_reason = validity.reason;
-            if (a.valid) {
-                try {
-                    a.estimates = estimate_run(run);
-                } catch (const EmadiagError& e) {
-                    a.valid = false;
-                    a.invalid_reason = std::string("not estimated: ") + e.what();
-                }
-            }
+            AssessedRun a = assess_run(run, run.sequence, validity.valid, validity.reason);
             const Assessment verdict = assess({a}, limits);
 
             s.tail_number = o->tail;

@@ -1,10 +1,27 @@
 #include "diagnosis/verdict.hpp"
 
+#include "core/emadiag_error.hpp"
 #include "estimation/health_estimate.hpp"
 
 #include <sstream>
+#include <utility>
 
 namespace emadiag {
+
+AssessedRun assess_run(const Run& run, std::string sequence, bool valid, std::string invalid_reason) {
+    AssessedRun a;
+    a.sequence = std::move(sequence);
+    a.valid = valid;
+    a.invalid_reason = std::move(invalid_reason);
+    if (!a.valid) return a;
+    try {
+        a.estimates = estimate_run(run);
+    } catch (const EmadiagError& e) {
+        a.valid = false;
+        a.invalid_reason = std::string("not estimated: ") + e.what();
+    }
+    return a;
+}
 namespace {
 
 std::string describe(const Finding& f) {

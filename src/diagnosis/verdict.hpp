@@ -43,6 +43,11 @@ struct AssessedRun {
     std::optional<RunEstimates> estimates;  ///< empty when the run was not estimated
 };
 
+/// The run as the verdict sees it: estimated (estimate_run) when `valid`; an estimator that refuses
+/// the run makes it not valid, "not estimated: " and the estimator's reason. One rule for import and
+/// history-sim.
+[[nodiscard]] AssessedRun assess_run(const Run& run, std::string sequence, bool valid, std::string invalid_reason);
+
 struct Assessment {
     Verdict verdict = Verdict::NoTest;
     std::string reason;  ///< one line a technician can act on
