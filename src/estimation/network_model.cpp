@@ -4,6 +4,7 @@
 #include "estimation/network_model.hpp"
 
 #include "core/emadiag_error.hpp"
+#include "estimation/number_text.hpp"
 #include "estimation/dataset.hpp"
 #include "emadiag/io/bounded_json.hpp"
 #include "emadiag/io/output_path.hpp"
@@ -28,12 +29,6 @@ constexpr double kMaxStdErrorNormalised = 1.0;
 /// Problems listed in one error (all are counted).
 constexpr std::size_t kMaxListedModelProblems = 20;
 
-std::string num(double v) {
-    std::ostringstream os;
-    os.precision(10);
-    os << v;
-    return os.str();
-}
 
 /// The semantic checks of a model file (issue 21 item 3): each problem names the field and value.
 std::vector<std::string> model_problems(const nlohmann::json& j, const NetworkModel& m) {
@@ -50,8 +45,8 @@ std::vector<std::string> model_problems(const nlohmann::json& j, const NetworkMo
         const double se = m.std_error_normalised[o];
         if (!(std::isfinite(se) && se > 0 && se <= kMaxStdErrorNormalised))
             out.push_back("std_error_normalised[" + std::to_string(o) + "] (" +
-                          (o < m.spec.outputs.size() ? m.spec.outputs[o] : std::string("?")) + ") = " + num(se) +
-                          " is not in (0, " + num(kMaxStdErrorNormalised) + "] (normalised units: 1 is the whole section-8 range)");
+                          (o < m.spec.outputs.size() ? m.spec.outputs[o] : std::string("?")) + ") = " + number_text(se) +
+                          " is not in (0, " + number_text(kMaxStdErrorNormalised) + "] (normalised units: 1 is the whole section-8 range)");
     }
     for (std::size_t a = 0; a < m.spec.outputs.size(); ++a)
         for (std::size_t b = 0; b < a; ++b)
@@ -63,7 +58,7 @@ std::vector<std::string> model_problems(const nlohmann::json& j, const NetworkMo
         const double lo = m.input_norm.min(i), hi = m.input_norm.max(i);
         if (std::isfinite(lo) && std::isfinite(hi) && hi > lo) continue;
         if (bad_inputs++ < kMaxListedModelProblems)
-            out.push_back("input_normalisation: input " + std::to_string(i) + " has min " + num(lo) + ", max " + num(hi) +
+            out.push_back("input_normalisation: input " + std::to_string(i) + " has min " + number_text(lo) + ", max " + number_text(hi) +
                           " (max must exceed min)");
     }
     if (bad_inputs > kMaxListedModelProblems)

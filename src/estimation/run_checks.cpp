@@ -1,6 +1,7 @@
 #include "estimation/run_checks.hpp"
 
 #include "core/emadiag_error.hpp"
+#include "estimation/number_text.hpp"
 
 #include <cmath>
 #include <sstream>
@@ -11,12 +12,6 @@ namespace emadiag {
 namespace {
 constexpr std::size_t kMaxListedProblems = 20;
 
-std::string fmt(double v) {
-    std::ostringstream os;
-    os.precision(10);
-    os << v;
-    return os.str();
-}
 }  // namespace
 
 void check_run(const Run& run) {
@@ -30,7 +25,7 @@ void check_run(const Run& run) {
         {"k_t_Nm_per_A", c.k_t_nm_per_a}, {"J_kgm2", c.j_kgm2}, {"tau", c.tau}, {"sample_period_s", c.sample_period_s}};
     for (const auto& k : constants) {
         if (!std::isfinite(k.value) || k.value <= kMinConstant) {
-            problem("constant " + std::string(k.name) + " is missing or not positive (value " + fmt(k.value) +
+            problem("constant " + std::string(k.name) + " is missing or not positive (value " + number_text(k.value) +
                     "); give it as a '# " + k.name + "=...' header line");
         }
     }
@@ -40,21 +35,21 @@ void check_run(const Run& run) {
     }
     for (std::size_t i = 0; i < run.samples.size(); ++i) {
         const auto& s = run.samples[i];
-        const std::string row = "sample row " + std::to_string(i + 1) + " (t_s=" + fmt(s.t_s) + ")";
+        const std::string row = "sample row " + std::to_string(i + 1) + " (t_s=" + number_text(s.t_s) + ")";
         const struct { const char* name; double value; } cols[] = {
             {"t_s", s.t_s}, {"current_A", s.current_a}, {"speed_rad_s", s.speed_rad_s},
             {"theta_m_rad", s.theta_m_rad}, {"hinge_moment_Nm", s.hinge_moment_nm}, {"command_deg", s.command_deg}};
         for (const auto& col : cols) {
-            if (!std::isfinite(col.value)) problem(row + ": " + col.name + " is " + fmt(col.value));
+            if (!std::isfinite(col.value)) problem(row + ": " + col.name + " is " + number_text(col.value));
         }
         if (i > 0 && std::isfinite(s.t_s) && std::isfinite(run.samples[i - 1].t_s)) {
             const double dt_s = s.t_s - run.samples[i - 1].t_s;
             if (!(dt_s > 0)) {
-                problem(row + ": time does not increase (previous row t_s=" + fmt(run.samples[i - 1].t_s) + ")");
+                problem(row + ": time does not increase (previous row t_s=" + number_text(run.samples[i - 1].t_s) + ")");
             } else if (c.sample_period_s > 0 &&
                        std::abs(dt_s - c.sample_period_s) > kSamplePeriodTolerance * c.sample_period_s) {
-                problem(row + ": spacing " + fmt(dt_s) + " s differs from sample_period_s " + fmt(c.sample_period_s) +
-                        " by more than " + fmt(100 * kSamplePeriodTolerance) + " %");
+                problem(row + ": spacing " + number_text(dt_s) + " s differs from sample_period_s " + number_text(c.sample_period_s) +
+                        " by more than " + number_text(100 * kSamplePeriodTolerance) + " %");
             }
         }
     }
