@@ -210,9 +210,8 @@ const bool registered = register_command(Command{
             }
             if (!warning.empty() && (o->format == "text" || o->format == "csv")) text = "# " + escape_text(warning) + "\n" + text;
             if (!warning.empty() && o->format == "html") {
-                std::string escaped;
-                for (const char c : warning) escaped += c == '<' ? "&lt;" : c == '>' ? "&gt;" : c == '&' ? "&amp;" : c == '"' ? "&quot;" : std::string(1, c);
-                const std::string banner = "<p role=\"alert\" style=\"border:3px solid #b00;padding:8px;color:#b00;font-weight:bold\">" + escaped + "</p>\n";
+                const std::string banner = "<p role=\"alert\" style=\"border:3px solid #b00;padding:8px;color:#b00;font-weight:bold\">" +
+                                           report::html_escape(warning) + "</p>\n";
                 const auto body = text.find("<body");
                 const auto at = body == std::string::npos ? std::string::npos : text.find('>', body);
                 text.insert(at == std::string::npos ? 0 : at + 1, "\n" + banner);
