@@ -153,6 +153,7 @@ private:
     std::string cycle_key_;
     std::unordered_map<std::string, std::size_t> finished_cycles_;  // key -> its last line
     std::size_t time_col_ = 0, cycle_col_ = 0;
+    std::size_t prev_row_line_ = 0;  // line of the previous data row
 };
 
 void Importer::start_run() {
@@ -347,7 +348,7 @@ bool Importer::row_cycle(std::string_view field, bool& new_cycle) {
                 std::to_string(seen->second) + " (a cycle's rows must be contiguous)");
         return false;
     }
-    finished_cycles_.emplace(cycle_key_, prev_line_);
+    finished_cycles_.emplace(cycle_key_, prev_row_line_);
     run_.cycles.back().end = row;
     cycle_key_.assign(field);
     run_.cycles.push_back({row, row, cycle_key_, line_no_});
@@ -409,6 +410,11 @@ void Importer::on_row(const std::vector<std::string_view>& fields) {
     }
     bool ok = true, new_cycle = false;
     if (map_.cycles.source == CycleSource::column) ok = row_cycle(fields[cycle_col_], new_cycle);
+    struct LineMark {
+        std::size_t& mark;
+        std::size_t line;
+        ~LineMark() { mark = line; }
+    } mark_line{prev_row_line_, line_no_};
     double t_s = 0.0;
     if (!row_time(map_.time.source == TimeSource::column ? fields[time_col_] : std::string_view(), new_cycle, t_s)) ok = false;
     for (std::size_t i = 0; i < ncols_; ++i) {
