@@ -2,8 +2,9 @@
 
 #include "emadiag/db/sha256.hpp"
 #include "measured/cycle_detection.hpp"
-#include "measured/differentiator.hpp"
+#include "measured/derived_signals.hpp"
 #include "measured/measured_error.hpp"
+#include "measured/number_text.hpp"
 
 #include <sys/stat.h>
 
@@ -22,12 +23,6 @@ namespace emadiag::measured {
 
 namespace {
 
-/// Shortest text that reads back as `v`.
-std::string num(double v) {
-    char buf[32];
-    const auto r = std::to_chars(buf, buf + sizeof buf, v);
-    return std::string(buf, r.ptr);
-}
 
 std::string_view trim(std::string_view f, char delimiter) {
     auto blank = [&](char c) { return (c == ' ' || c == '\t') && c != delimiter; };
@@ -99,7 +94,6 @@ private:
     bool row_cycle(std::string_view field, bool& new_cycle);
     void finish_rows();
     void build_cycles_and_derived();
-    void compute_derived(const DerivedSpec& d);
 
     std::string where() const { return path_ + ":" + std::to_string(line_no_) + ": "; }
     std::string column_text(std::size_t index) const {
@@ -166,8 +160,8 @@ void Importer::start_run() {
         sig.name = s.signal;
         sig.quantity = s.unit.quantity;
         if (s.noise) sig.noise_si = *s.noise * s.unit.factor;
-        sig.origin = "column " + s.column.describe() + " (" + std::string(s.unit.name) + ", scale " + num(s.scale) + ", offset " +
-                     num(s.offset) + ", sign " + (s.sign > 0 ? "+1" : "-1") + ")";
+        sig.origin = "column " + s.column.describe() + " (" + std::string(s.unit.name) + ", scale " + number_text(s.scale) + ", offset " +
+                     number_text(s.offset) + ", sign " + (s.sign > 0 ? "+1" : "-1") + ")";
         run_.signals.push_back(std::move(sig));
     }
     for (const LabelColumnSpec& l : map_.labels) run_.labels.push_back({l.label, {}, {}});
@@ -219,6 +213,7 @@ void Importer::on_line(std::string_view line) {
     if (line.size() > kMeasuredMaxLineBytes) {
         fatal(where() + "line longer than the limit kMeasuredMaxLineBytes = " + std::to_string(kMeasuredMaxLineBytes) + " bytes");
     }
+    if (line_no_ == 1 && line.starts_with("\xEF\xBB\xBF")) line.remove_prefix(3);  // a UTF-8 byte order mark
     if (line_no_ <= map_.format.skip_lines) return;
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     if (!map_.format.comment_prefix.empty() && line.starts_with(map_.format.comment_prefix)) {
@@ -364,10 +359,10 @@ bool Importer::row_time(std::string_view field, bool new_cycle, double& t_s) {
     }
     double raw = 0.0;
     const NumberStatus status = parse_number(field, map_.format.decimal, raw);
-    const std::string at = where() + column_text(time_col_) + ": '" + std::string(field) + "'";
-    if (status == NumberStatus::malformed) return problem(at + " is not a number"), false;
-    if (status == NumberStatus::out_of_range) return problem(at + " is out of the range of a double"), false;
-    if (status == NumberStatus::not_finite) return problem(at + " is not finite (NaN and infinity are refused)"), false;
+    auto at = [&] { return where() + column_text(time_col_) + ": '" + std::string(field) + "'"; };  // built on a problem only
+    if (status == NumberStatus::malformed) return problem(at() + " is not a number"), false;
+    if (status == NumberStatus::out_of_range) return problem(at() + " is out of the range of a double"), false;
+    if (status == NumberStatus::not_finite) return problem(at() + " is not finite (NaN and infinity are refused)"), false;
     const double col_s = ts.unit.factor * raw + ts.unit.offset;
     const bool restart = ts.restarts_per_cycle && new_cycle;
     if (!have_prev_time_ || restart) {
@@ -375,9 +370,9 @@ bool Importer::row_time(std::string_view field, bool new_cycle, double& t_s) {
         cycle_col0_s_ = col_s;
     } else {
         const double step_s = col_s - prev_col_t_s_;
-        const std::string prev = " the previous time " + num(prev_col_t_s_) + " s at line " + std::to_string(prev_line_);
+        auto prev = [&] { return " the previous time " + number_text(prev_col_t_s_) + " s at line " + std::to_string(prev_line_); };
         if (!(step_s > 0.0)) {
-            problem(at + " (" + num(col_s) + " s) is not after" + prev + " (time must increase)");
+            problem(at() + " (" + number_text(col_s) + " s) is not after" + prev() + " (time must increase)");
             prev_col_t_s_ = col_s;
             prev_line_ = line_no_;
             return false;
@@ -385,8 +380,8 @@ bool Importer::row_time(std::string_view field, bool new_cycle, double& t_s) {
         if (nominal_period_s_ == 0.0) nominal_period_s_ = step_s;  // no rate_hz: the first step is nominal
         const double limit_s = ts.max_step_factor * nominal_period_s_;
         if (step_s > limit_s) {
-            problem(at + " (" + num(col_s) + " s) is " + num(step_s) + " s after" + prev + ": a gap (the limit is max_step_factor " +
-                    num(ts.max_step_factor) + " x the nominal period " + num(nominal_period_s_) + " s = " + num(limit_s) + " s)");
+            problem(at() + " (" + number_text(col_s) + " s) is " + number_text(step_s) + " s after" + prev() + ": a gap (the limit is max_step_factor " +
+                    number_text(ts.max_step_factor) + " x the nominal period " + number_text(nominal_period_s_) + " s = " + number_text(limit_s) + " s)");
         }
     }
     prev_col_t_s_ = col_s;
@@ -481,58 +476,12 @@ void Importer::build_cycles_and_derived() {
     };
     motion_now();
     for (const DerivedSpec& d : map_.derived) {
-        compute_derived(d);
+        run_.signals.push_back(derive_signal(run_, d, map_.path));
         motion_now();
     }
     std::size_t covered = 0;
     for (const Cycle& c : run_.cycles) covered += c.end - c.begin;
     run_.rows_outside_cycles = run_.time_s.size() - covered;
-}
-
-void Importer::compute_derived(const DerivedSpec& d) {
-    const MeasuredSignal* a = run_.signal(d.of[0]);
-    const MeasuredSignal* b = d.of.size() > 1 ? run_.signal(d.of[1]) : nullptr;
-    MeasuredSignal out;
-    out.name = d.signal;
-    const std::size_t n = run_.time_s.size();
-    out.values.resize(n);
-    if (d.op == DerivedOp::derivative) {
-        const auto q = derivative_quantity(a->quantity);
-        if (!q) {
-            throw MeasuredError("column map " + map_.path + ": derived '" + d.signal + "': the derivative of a " + std::string(quantity_name(a->quantity)) +
-                                " ('" + a->name + "') is not supported (length, linear_speed, angle and angular_speed are)");
-        }
-        out.quantity = *q;
-        const double h = nominal_period_s_;
-        if (d.per_cycle && !run_.cycles.empty()) {
-            std::size_t at = 0;
-            for (const Cycle& c : run_.cycles) {
-                differentiate(run_.time_s, a->values, at, c.begin, d.method, d.half_window, h, out.values);  // rows before the cycle
-                differentiate(run_.time_s, a->values, c.begin, c.end, d.method, d.half_window, h, out.values);
-                at = c.end;
-            }
-            differentiate(run_.time_s, a->values, at, n, d.method, d.half_window, h, out.values);
-        } else {
-            differentiate(run_.time_s, a->values, 0, n, d.method, d.half_window, h, out.values);
-        }
-        out.noise_gain_per_s = derivative_noise_gain_per_s(d.method, d.half_window, h);
-        out.noise_si = a->noise_si * out.noise_gain_per_s;
-        out.origin = "derivative of " + a->name + " by " + (d.method == Differentiator::central_difference ? "central difference" :
-                     "Savitzky-Golay (quadratic, window " + std::to_string(2 * d.half_window + 1) + ")") + ", h = " + num(h) + " s" +
-                     (d.per_cycle ? ", per cycle" : "");
-    } else {
-        if (a->quantity != b->quantity) {
-            throw MeasuredError("column map " + map_.path + ": derived '" + d.signal + "': '" + a->name + "' is a " + std::string(quantity_name(a->quantity)) +
-                                " and '" + b->name + "' a " + std::string(quantity_name(b->quantity)) + ": a " +
-                                (d.op == DerivedOp::sum ? "sum" : "difference") + " needs one quantity");
-        }
-        out.quantity = a->quantity;
-        const double sgn = d.op == DerivedOp::sum ? 1.0 : -1.0;
-        for (std::size_t i = 0; i < n; ++i) out.values[i] = a->values[i] + sgn * b->values[i];
-        out.noise_si = std::hypot(a->noise_si, b->noise_si);
-        out.origin = a->name + (d.op == DerivedOp::sum ? " + " : " - ") + b->name;
-    }
-    run_.signals.push_back(std::move(out));
 }
 
 }  // namespace
