@@ -167,3 +167,56 @@ TEST(HostileMeasuredImport, RefusesADirectory) {
 
 }  // namespace
 }  // namespace emadiag::measured
+
+namespace emadiag::measured {
+namespace {
+
+TEST(HostileMeasuredImportLimits, ValuesHeldAreBounded) {
+    // One column and 255 derived sums: 257 values per row, so kMeasuredMaxValues / 257 rows at most.
+    std::string map = R"({"schema": "emadiag-column-map/1", "name": "wide", "columns": [{"column": "x", "signal": "x", "unit": "m"}],
+      "time": {"source": "rate", "rate_hz": 1000}, "derived": [)";
+    for (int k = 0; k < 255; ++k) map += std::string(k ? "," : "") + R"({"signal": "s)" + std::to_string(k) + R"(", "op": "sum", "of": ["x", "x"]})";
+    map += "]}";
+    const std::size_t max_rows = kMeasuredMaxValues / 257;
+    std::string csv = "x\n";
+    csv.reserve(2 * max_rows + 8);
+    for (std::size_t r = 0; r <= max_rows; ++r) csv += "1\n";
+    const std::string e = refusal("values.csv", csv, map);
+    EXPECT_THAT(e, HasSubstr(path_of("values.csv") + ":" + std::to_string(max_rows + 2) + ": more than " + std::to_string(max_rows) +
+                             " rows: the limit kMeasuredMaxValues = 40000000 values held (257 per row)"));
+    // The refusal is at row max_rows + 1 (line max_rows + 2 after the header): row max_rows itself was kept.
+}
+
+TEST(HostileMeasuredImportLimits, DistinctLabelTextsAreBounded) {
+    const std::string map = R"({"schema": "emadiag-column-map/1", "name": "labels",
+      "columns": [{"column": "x", "signal": "x", "unit": "m"}, {"column": "tag", "label": "tag"}],
+      "time": {"source": "rate", "rate_hz": 1000}})";
+    std::string csv = "x,tag\n";
+    for (std::size_t r = 0; r <= kMeasuredMaxLabelValues; ++r) csv += "1,t" + std::to_string(r) + "\n";
+    EXPECT_THAT(refusal("labels.csv", csv, map),
+                HasSubstr(path_of("labels.csv") + ":65538: column 'tag' (index 1): 't65536' would be distinct text number 65537 of label 'tag': "
+                                                  "the limit kMeasuredMaxLabelValues = 65536"));
+}
+
+TEST(HostileMeasuredImportLimits, DerivedOperandsOfTwoQuantitiesAreRefused) {
+    const std::string map = R"({"schema": "emadiag-column-map/1", "name": "q",
+      "columns": [{"column": "x", "signal": "x", "unit": "mm"}, {"column": "i", "signal": "i", "unit": "A"}],
+      "time": {"source": "rate", "rate_hz": 4},
+      "derived": [{"signal": "bad", "op": "difference", "of": ["x", "i"]}]})";
+    EXPECT_THAT(refusal("quantities.csv", "x,i\n1,2\n", map),
+                HasSubstr("[measured] column map small.map.json: derived 'bad': 'x' is a length and 'i' a current: a difference needs one quantity"));
+    const std::string deriv = R"({"schema": "emadiag-column-map/1", "name": "q", "columns": [{"column": "i", "signal": "i", "unit": "A"}],
+      "time": {"source": "rate", "rate_hz": 4}, "derived": [{"signal": "di", "op": "derivative", "of": "i", "method": "central_difference"}]})";
+    EXPECT_THAT(refusal("deriv.csv", "i\n1\n2\n", deriv),
+                HasSubstr("derived 'di': the derivative of a current ('i') is not supported (length, linear_speed, angle and angular_speed are)"));
+}
+
+TEST(HostileMeasuredImportLimits, ByteOrderMarkBeforeTheHeaderIsSkipped) {
+    const ColumnMap map = parse_column_map(small_map(), "small.map.json");
+    const MeasuredRun run = import_measured_csv(test::measured_file("bom.csv", "\xEF\xBB\xBFt,x,i,state\r\n0,1,0.5,ok\r\n0.25,2,0.5,ok\r\n"), map);
+    ASSERT_EQ(run.rows(), 2U);
+    EXPECT_DOUBLE_EQ(run.signal("position")->values[1], 0.002);
+}
+
+}  // namespace
+}  // namespace emadiag::measured
