@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <set>
+#include <utility>
 
 namespace emadiag::measured {
 
@@ -121,6 +122,26 @@ public:
         return ok;
     }
 
+    /// The objects of the array `key` (at most kMaxMapEntries), each with its path; problems for
+    /// anything else. `required`: the array must be there and not empty.
+    std::vector<std::pair<std::string, const json*>> entries(const json& root, const char* key, bool required) {
+        std::vector<std::pair<std::string, const json*>> out;
+        const std::string path = std::string("/") + key;
+        const auto it = root.find(key);
+        if (it == root.end() && !required) return out;
+        if (it == root.end() || !it->is_array() || (required && it->empty())) {
+            problem(path, required ? "must be a non-empty array" : "must be an array");
+            return out;
+        }
+        if (it->size() > kMaxMapEntries) problem(path, std::to_string(it->size()) + " entries exceed the limit kMaxMapEntries = " + std::to_string(kMaxMapEntries));
+        for (std::size_t i = 0; i < it->size() && i < kMaxMapEntries; ++i) {
+            const json& e = (*it)[i];
+            if (e.is_object()) out.emplace_back(path + "/" + std::to_string(i), &e);
+            else problem(path + "/" + std::to_string(i), "must be an object");
+        }
+        return out;
+    }
+
 private:
     std::string source_;
     std::vector<std::string> problems_;
@@ -154,19 +175,8 @@ void read_format(MapReader& r, const json& root, CsvFormat& f) {
 }
 
 void read_columns(MapReader& r, const json& root, ColumnMap& m, std::set<std::string>& names) {
-    const auto it = root.find("columns");
-    if (it == root.end() || !it->is_array() || it->empty()) {
-        r.problem("/columns", "must be a non-empty array of columns");
-        return;
-    }
-    if (it->size() > kMaxMapEntries) r.problem("/columns", std::to_string(it->size()) + " entries exceed the limit kMaxMapEntries = " + std::to_string(kMaxMapEntries));
-    for (std::size_t i = 0; i < it->size() && i < kMaxMapEntries; ++i) {
-        const std::string path = "/columns/" + std::to_string(i);
-        const json& c = (*it)[i];
-        if (!c.is_object()) {
-            r.problem(path, "must be an object");
-            continue;
-        }
+    for (const auto& [path, entry] : r.entries(root, "columns", true)) {
+        const json& c = *entry;
         r.only_keys(c, path, {"column", "index", "signal", "label", "ignore", "unit", "quantity", "scale", "offset", "sign", "noise"});
         const ColumnRef ref = r.column_ref(c, path);
         const int roles = int(c.contains("signal")) + int(c.contains("label")) + int(c.contains("ignore"));
@@ -288,20 +298,8 @@ void read_cycles(MapReader& r, const json& root, CycleSpec& c) {
 }
 
 void read_derived(MapReader& r, const json& root, ColumnMap& m, std::set<std::string>& names) {
-    const auto it = root.find("derived");
-    if (it == root.end()) return;
-    if (!it->is_array()) {
-        r.problem("/derived", "must be an array");
-        return;
-    }
-    if (it->size() > kMaxMapEntries) r.problem("/derived", std::to_string(it->size()) + " entries exceed the limit kMaxMapEntries = " + std::to_string(kMaxMapEntries));
-    for (std::size_t i = 0; i < it->size() && i < kMaxMapEntries; ++i) {
-        const std::string path = "/derived/" + std::to_string(i);
-        const json& o = (*it)[i];
-        if (!o.is_object()) {
-            r.problem(path, "must be an object");
-            continue;
-        }
+    for (const auto& [path, entry] : r.entries(root, "derived", false)) {
+        const json& o = *entry;
         r.only_keys(o, path, {"signal", "op", "of", "method", "half_window", "per_cycle"});
         DerivedSpec d;
         const auto signal = r.string_at(o, path, "signal", true);

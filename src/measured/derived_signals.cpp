@@ -4,7 +4,6 @@
 #include "measured/measured_error.hpp"
 #include "measured/number_text.hpp"
 
-#include <charconv>
 #include <cmath>
 
 namespace emadiag::measured {
