@@ -6,7 +6,9 @@
 #include "measured/measured_error.hpp"
 #include "measured/number_text.hpp"
 
+#include <fcntl.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <charconv>
@@ -174,10 +176,19 @@ void Importer::start_run() {
 }
 
 void Importer::read_file() {
-    std::unique_ptr<std::FILE, FileCloser> f(std::fopen(path_.c_str(), "rb"));
-    if (!f) throw MeasuredError(path_ + ": cannot open: " + std::strerror(errno));
+    // Opened without blocking and checked on the descriptor: a FIFO or a device is refused, never waited on.
+    const int fd = ::open(path_.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) throw MeasuredError(path_ + ": cannot open: " + std::strerror(errno));
     struct stat st {};
-    if (fstat(fileno(f.get()), &st) != 0 || !S_ISREG(st.st_mode)) throw MeasuredError(path_ + ": not a regular file");
+    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        ::close(fd);
+        throw MeasuredError(path_ + ": not a regular file");
+    }
+    std::unique_ptr<std::FILE, FileCloser> f(::fdopen(fd, "rb"));
+    if (!f) {
+        ::close(fd);
+        throw MeasuredError(path_ + ": cannot open: " + std::strerror(errno));
+    }
     file_bytes_ = static_cast<std::size_t>(st.st_size);
     db::Sha256 hash;
     std::vector<char> block(kMeasuredReadBlockBytes + kMeasuredMaxLineBytes + 1);

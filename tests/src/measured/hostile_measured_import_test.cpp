@@ -8,6 +8,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 namespace emadiag::measured {
 namespace {
 
@@ -160,9 +163,24 @@ TEST(HostileMeasuredImport, MapProblemsAreAllListed) {
     }
 }
 
-TEST(HostileMeasuredImport, RefusesADirectory) {
+TEST(HostileMeasuredImport, RefusesADirectoryAFifoAndADeviceWithoutBlocking) {
     const ColumnMap map = parse_column_map(small_map(), "small.map.json");
-    EXPECT_THROW((void)import_measured_csv(EMADIAG_BINARY_DIR, map), MeasuredError);
+    auto refused = [&](const std::string& path) {
+        try {
+            (void)import_measured_csv(path, map);
+        } catch (const MeasuredError& e) {
+            return std::string(e.what());
+        }
+        return std::string("(no error)");
+    };
+    EXPECT_EQ(refused(EMADIAG_BINARY_DIR), "[measured] " + std::string(EMADIAG_BINARY_DIR) + ": not a regular file");
+    const std::string fifo = path_of("fifo.csv");
+    ::unlink(fifo.c_str());
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    EXPECT_EQ(refused(fifo), "[measured] " + fifo + ": not a regular file");  // no writer: a blocking open would hang here
+    ::unlink(fifo.c_str());
+    EXPECT_EQ(refused("/dev/zero"), "[measured] /dev/zero: not a regular file");
+    EXPECT_THAT(refused(path_of("absent.csv")), HasSubstr(path_of("absent.csv") + ": cannot open: No such file or directory"));
 }
 
 }  // namespace
