@@ -11,6 +11,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -212,6 +213,34 @@ TEST(MeasuredImport, DerivativeNoiseMatchesItsFormula) {
         EXPECT_NEAR(sd / stated, 1.0, 0.03) << "seed " << kSeed << " m " << m;
     }
     EXPECT_NEAR(derivative_noise_gain_per_s(Differentiator::central_difference, 1, kH), 1.0 / (std::sqrt(2.0) * kH), 1e-12);
+}
+
+TEST(MeasuredImport, NumbersReadBackExactly) {
+    // Property: numbers written shortest-exact (%.17g), with blanks and '+' around them, read back to the bit.
+    constexpr std::uint64_t kSeed = 424242;
+    constexpr std::size_t kRows = 5000;
+    std::mt19937_64 rng(kSeed);
+    std::uniform_real_distribution<double> mantissa(-10.0, 10.0);
+    std::uniform_int_distribution<int> exponent(-30, 30), pad(0, 2);
+    std::vector<std::array<double, 3>> want(kRows);
+    std::string csv = "a|b|c\n";
+    for (std::size_t r = 0; r < kRows; ++r) {
+        for (std::size_t c = 0; c < 3; ++c) {
+            want[r][c] = mantissa(rng) * std::pow(10.0, exponent(rng));
+            std::string cell = fmt(want[r][c]);
+            if (want[r][c] > 0 && pad(rng) == 0) cell = "+" + cell;
+            csv += std::string(static_cast<std::size_t>(pad(rng)), ' ') + cell + std::string(static_cast<std::size_t>(pad(rng)), '\t');
+            csv += c < 2 ? "|" : "\n";
+        }
+    }
+    const std::string map_text = R"({"schema": "emadiag-column-map/1", "name": "pipes", "format": {"delimiter": "|"},
+      "columns": [{"column": "a", "signal": "a", "unit": "m"}, {"column": "b", "signal": "b", "unit": "A"}, {"column": "c", "signal": "c", "unit": "1"}],
+      "time": {"source": "rate", "rate_hz": 1000}})";
+    const MeasuredRun run = import_measured_csv(test::measured_file("pipes.csv", csv), parse_column_map(map_text, "pipes.map.json"));
+    ASSERT_EQ(run.rows(), kRows) << "seed " << kSeed;
+    for (std::size_t r = 0; r < kRows; ++r) {
+        for (std::size_t c = 0; c < 3; ++c) ASSERT_EQ(run.signals[c].values[r], want[r][c]) << "seed " << kSeed << " row " << r << " column " << c;
+    }
 }
 
 TEST(MeasuredImport, ShippedRigMapLoads) {

@@ -63,6 +63,20 @@ TEST(RigData, EveryStateImportsThroughTheShippedMap) {
         // The set point's speed in the middle of the first extension: 24 mm/s.
         EXPECT_NEAR(run.signal("set_point_speed")->values[run.cycles[0].begin + 50], kStrokeSpeed_m_s, 1e-9);
         EXPECT_NEAR(run.signal("speed")->noise_gain_per_s, 1.0 / (std::sqrt(2.0) * 0.04), 1e-9);
+        // The measured speed follows the set point's: its mean over the extensions (set-point speed
+        // 24 mm/s) within 5 % of it.
+        double sum_m_s = 0;
+        std::size_t n = 0;
+        const auto& sp_speed = run.signal("set_point_speed")->values;
+        const auto& speed = run.signal("speed")->values;
+        for (std::size_t i = 0; i < run.rows(); ++i) {
+            if (std::fabs(sp_speed[i] - kStrokeSpeed_m_s) < 1e-9) {
+                sum_m_s += speed[i];
+                ++n;
+            }
+        }
+        ASSERT_GT(n, run.cycles.size() * 100);
+        EXPECT_NEAR(sum_m_s / static_cast<double>(n), kStrokeSpeed_m_s, 0.05 * kStrokeSpeed_m_s);
     }
 }
 
