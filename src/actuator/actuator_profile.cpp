@@ -209,9 +209,10 @@ void read_transmission(ProfileReader& r, const json& root, Transmission& t) {
         t.efficiency_aiding_from = static_cast<EfficiencyAidingFrom>(*from);
     }
     if (t.efficiency_aiding_from == EfficiencyAidingFrom::eq4) {
-        if (!t.efficiency_opposing || !t.efficiency_aiding || !t.gear_ratio) {
+        const auto given_null = [&](const char* k) { return o->contains(k) && o->at(k).is_null(); };
+        if (given_null("efficiency_opposing") || given_null("efficiency_aiding") || given_null("gear_ratio")) {
             r.problem("/transmission/efficiency_aiding_from", "\"eq4\" needs efficiency_opposing, efficiency_aiding and gear_ratio known");
-        } else {
+        } else if (t.efficiency_opposing && t.efficiency_aiding && t.gear_ratio) {
             const double eq4 = sim::eta_a_from_eta_o(*t.efficiency_opposing, *t.gear_ratio);  // eq. (4)
             if (std::abs(eq4 - *t.efficiency_aiding) > kEq4Tolerance) {
                 r.problem("/transmission/efficiency_aiding", o->at("efficiency_aiding").dump() + " is not eq. (4) of efficiency_opposing " +

@@ -51,10 +51,10 @@ void ProfileReader::keys(const json& obj, const std::string& path, std::initiali
 
 std::string ProfileReader::bound_text(Bound bound) {
     switch (bound) {
-        case Bound::finite: return "must be a finite number";
-        case Bound::positive: return "must be > 0";
-        case Bound::non_negative: return "must be >= 0";
-        case Bound::efficiency: return "must be in (0, 1]";
+        case Bound::finite: return "a finite number";
+        case Bound::positive: return "> 0";
+        case Bound::non_negative: return ">= 0";
+        case Bound::efficiency: return "in (0, 1]";
     }
     return "";
 }
@@ -74,7 +74,7 @@ std::optional<double> ProfileReader::number(const json& obj, const std::string& 
     const auto it = obj.find(key);
     if (it == obj.end()) return std::nullopt;
     if (it->is_null()) {
-        if (null == Null::refused) problem(child(path, key), "must be known: " + bound_text(bound) + ", not null");
+        if (null == Null::refused) problem(child(path, key), "must be known (" + bound_text(bound) + "), not null");
         return std::nullopt;
     }
     if (!it->is_number() || !std::isfinite(it->get<double>())) {
@@ -85,7 +85,7 @@ std::optional<double> ProfileReader::number(const json& obj, const std::string& 
     const bool ok = bound == Bound::finite || (bound == Bound::positive && v > 0) || (bound == Bound::non_negative && v >= 0) ||
                     (bound == Bound::efficiency && v > 0 && v <= 1);
     if (!ok) {
-        problem(child(path, key), bound_text(bound) + ", not " + it->dump());
+        problem(child(path, key), "must be " + bound_text(bound) + ", not " + it->dump());
         return std::nullopt;
     }
     return v;

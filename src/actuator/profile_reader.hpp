@@ -50,7 +50,7 @@ public:
     /// Finite numbers of an array of 1..max_count entries.
     std::optional<std::vector<double>> numbers(const nlohmann::json& value, const std::string& path, std::size_t max_count);
 
-    /// "must be > 0", "must be in (0, 1]", ...
+    /// "> 0", "in (0, 1]", ... (the range in messages)
     [[nodiscard]] static std::string bound_text(Bound bound);
 
 private:
