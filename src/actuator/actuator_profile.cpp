@@ -11,7 +11,6 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <set>
 
 namespace emadiag::actuator {
@@ -333,18 +332,9 @@ ActuatorProfile load_actuator_profile(const std::string& path) {
     const auto status = std::filesystem::status(path, ec);
     if (ec || !std::filesystem::exists(status)) throw ActuatorError("actuator profile " + path + ": no such file");
     if (!std::filesystem::is_regular_file(status)) throw ActuatorError("actuator profile " + path + ": not a regular file");
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw ActuatorError("actuator profile " + path + ": cannot open");
     // Read the bytes once: the hash is of exactly the text parsed.
-    std::string text;
-    char buf[65536];
-    while (in.read(buf, sizeof buf) || in.gcount() > 0) {
-        text.append(buf, static_cast<std::size_t>(in.gcount()));
-        if (text.size() > io::kMaxJsonBytes) {
-            throw ActuatorError("actuator profile " + path + ": file exceeds the limit kMaxJsonBytes = " + std::to_string(io::kMaxJsonBytes) + " bytes");
-        }
-    }
-    if (in.bad()) throw ActuatorError("actuator profile " + path + ": read error");
+    std::string text, error;
+    if (!io::read_bounded_text_file(path, text, error)) throw ActuatorError("actuator profile " + path + ": " + error);
     return parse_actuator_profile(text, path);
 }
 

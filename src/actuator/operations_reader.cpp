@@ -1,5 +1,6 @@
 #include "actuator/operations_reader.hpp"
 
+#include <optional>
 #include <set>
 #include <string>
 
@@ -14,24 +15,27 @@ constexpr std::size_t kMaxPolynomialCoefficients = 8;
 /// Largest state of an aircraft model.
 constexpr std::size_t kMaxAircraftStates = 8;
 
-/// A sequence or load case name: printable, no blank at either end, at most kMaxNameChars.
-void check_entry_name(ProfileReader& r, const std::string& path, const std::optional<std::string>& name, std::set<std::string>& seen) {
-    if (!name) return;
-    if (name->front() == ' ' || name->back() == ' ') r.problem(path + "/name", "'" + *name + "' must not start or end with a space");
-    if (!seen.insert(*name).second) r.problem(path + "/name", "'" + *name + "' is named twice");
+/// The name (unique within its array, no blank at either end) and the kind of a sequence or a load
+/// case; nullopt when either is wrong (with the keys checked against the common ones).
+std::optional<std::pair<std::string, std::size_t>> entry_head(ProfileReader& r, const std::string& path, const json& e,
+                                                              const std::vector<const char*>& kinds, std::set<std::string>& seen) {
+    const auto name = r.text(e, path, "name", kMaxNameChars, Null::refused);
+    if (name && (name->front() == ' ' || name->back() == ' ')) r.problem(path + "/name", "'" + *name + "' must not start or end with a space");
+    if (name && !seen.insert(*name).second) r.problem(path + "/name", "'" + *name + "' is named twice");
+    const auto kind = r.choice(e, path, "kind", kinds, Null::refused);
+    if (!name || !kind) {
+        r.keys(e, path, {"name", "kind", "description"});
+        return std::nullopt;
+    }
+    return std::make_pair(*name, *kind);
 }
 
 void read_sequence(ProfileReader& r, const std::string& path, const json& e, OutputKind output, std::set<std::string>& names, Operations& ops) {
+    const auto head = entry_head(r, path, e, {"polynomial", "breakaway", "trapezoid"}, names);
+    if (!head) return;
     Sequence s;
-    const auto name = r.text(e, path, "name", kMaxNameChars, Null::refused);
-    check_entry_name(r, path, name, names);
-    const auto kind = r.choice(e, path, "kind", {"polynomial", "breakaway", "trapezoid"}, Null::refused);
-    if (!name || !kind) {
-        r.keys(e, path, {"name", "kind", "description"});
-        return;
-    }
-    s.name = *name;
-    s.kind = static_cast<SequenceKind>(*kind);
+    s.name = head->first;
+    s.kind = static_cast<SequenceKind>(head->second);
     const bool rotary = output == OutputKind::rotary;
     switch (s.kind) {
         case SequenceKind::polynomial: {
@@ -95,16 +99,11 @@ void read_aircraft_model(ProfileReader& r, const std::string& path, const json& 
 }
 
 void read_load_case(ProfileReader& r, const std::string& path, const json& e, OutputKind output, std::set<std::string>& names, Operations& ops) {
+    const auto head = entry_head(r, path, e, {"constant", "ramp", "aircraft_linear_model"}, names);
+    if (!head) return;
     LoadCase c;
-    const auto name = r.text(e, path, "name", kMaxNameChars, Null::refused);
-    check_entry_name(r, path, name, names);
-    const auto kind = r.choice(e, path, "kind", {"constant", "ramp", "aircraft_linear_model"}, Null::refused);
-    if (!name || !kind) {
-        r.keys(e, path, {"name", "kind", "description"});
-        return;
-    }
-    c.name = *name;
-    c.kind = static_cast<LoadCaseKind>(*kind);
+    c.name = head->first;
+    c.kind = static_cast<LoadCaseKind>(head->second);
     const bool rotary = output == OutputKind::rotary;
     const char* load = rotary ? "load_nm" : "load_n";
     const char* rate = rotary ? "rate_nm_per_s" : "rate_n_per_s";

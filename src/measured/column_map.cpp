@@ -409,19 +409,9 @@ ColumnMap parse_column_map(std::string_view json_text, const std::string& source
 }
 
 ColumnMap load_column_map(const std::string& path) {
-    std::string error;
     // Read the bytes once: the hash is of exactly the text parsed.
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw MeasuredError("column map " + path + ": cannot open");
-    std::string text;
-    char buf[65536];
-    while (in.read(buf, sizeof buf) || in.gcount() > 0) {
-        text.append(buf, static_cast<std::size_t>(in.gcount()));
-        if (text.size() > io::kMaxJsonBytes) {
-            throw MeasuredError("column map " + path + ": file exceeds the limit kMaxJsonBytes = " + std::to_string(io::kMaxJsonBytes) + " bytes");
-        }
-    }
-    if (in.bad()) throw MeasuredError("column map " + path + ": read error");
+    std::string text, error;
+    if (!io::read_bounded_text_file(path, text, error)) throw MeasuredError("column map " + path + ": " + error);
     return parse_column_map(text, path);
 }
 

@@ -91,27 +91,35 @@ inline constexpr std::size_t kMaxJsonBytes = std::size_t{16} << 20;
     }
 }
 
-/// Reads a whole JSON file (at most kMaxJsonBytes) and parses it; on failure returns nullopt with
-/// the reason in `error` ("cannot open", the size limit, the depth limit, the parse error).
-[[nodiscard]] inline std::optional<nlohmann::json> read_bounded_json_file(const std::string& path, std::string& error) {
+/// Reads a whole file of at most kMaxJsonBytes into `text` (the bytes a loader parses and hashes);
+/// on failure returns false with the reason in `error` ("cannot open", the size limit, "read error").
+[[nodiscard]] inline bool read_bounded_text_file(const std::string& path, std::string& text, std::string& error) {
     std::ifstream in(path, std::ios::binary);
     if (!in) {
         error = "cannot open";
-        return std::nullopt;
+        return false;
     }
-    std::string text;
+    text.clear();
     char buf[65536];
     while (in.read(buf, sizeof buf) || in.gcount() > 0) {
         text.append(buf, static_cast<std::size_t>(in.gcount()));
         if (text.size() > kMaxJsonBytes) {
             error = "file exceeds the limit kMaxJsonBytes = " + std::to_string(kMaxJsonBytes) + " bytes";
-            return std::nullopt;
+            return false;
         }
     }
     if (in.bad()) {
         error = "read error";
-        return std::nullopt;
+        return false;
     }
+    return true;
+}
+
+/// Reads a whole JSON file (at most kMaxJsonBytes) and parses it; on failure returns nullopt with
+/// the reason in `error` ("cannot open", the size limit, the depth limit, the parse error).
+[[nodiscard]] inline std::optional<nlohmann::json> read_bounded_json_file(const std::string& path, std::string& error) {
+    std::string text;
+    if (!read_bounded_text_file(path, text, error)) return std::nullopt;
     return parse_bounded_json(text, error);
 }
 
