@@ -1,6 +1,7 @@
 // emadiag actuator list|show|check (issue 23 part 1), run as the real binary: the profiles of the
 // build tree, of an installed layout (<prefix>/bin/emadiag reads <prefix>/share/emadiag/actuators,
 // never ./actuators), and of EMADIAG_ACTUATORS_DIR.
+#include "src/cli/actuator_cli_dir.hpp"
 #include "support/cli_runner.hpp"
 
 #include <gmock/gmock.h>
@@ -22,17 +23,7 @@ using emadiag::test::run_shell;
 
 const std::string kSource = EMADIAG_SOURCE_DIR;
 
-class ActuatorCli : public ::testing::Test {
-protected:
-    void SetUp() override {
-        dir_ = fs::temp_directory_path() / ("emadiag_actuator_cli_" + std::to_string(getpid()) + "_" +
-                                            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-    fs::path dir_;
-};
+class ActuatorCli : public emadiag::test::ActuatorCliDir {};
 
 TEST_F(ActuatorCli, ListNamesTheBuildTreesProfiles) {
     const auto r = run_cli("actuator list");

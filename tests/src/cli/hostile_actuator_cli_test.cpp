@@ -1,6 +1,7 @@
 // emadiag actuator with hostile profiles and arguments (issue 23 part 1), run as the real binary:
 // check prints each problem of each file and exits 1; names with control characters are printed
 // escaped; list marks an invalid profile of the folder; misuse of the arguments is refused.
+#include "src/cli/actuator_cli_dir.hpp"
 #include "support/cli_runner.hpp"
 
 #include <nlohmann/json.hpp>
@@ -25,15 +26,8 @@ using nlohmann::json;
 
 const std::string kSource = EMADIAG_SOURCE_DIR;
 
-class HostileActuatorCli : public ::testing::Test {
+class HostileActuatorCli : public emadiag::test::ActuatorCliDir {
 protected:
-    void SetUp() override {
-        dir_ = fs::temp_directory_path() / ("emadiag_hostile_actuator_cli_" + std::to_string(getpid()) + "_" +
-                                            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    void TearDown() override { fs::remove_all(dir_); }
     /// The shipped EMA-REF-1 with `edit` applied, written to dir_/name.
     std::string write_edited(const std::string& name, void (*edit)(json&)) {
         std::ifstream in(kSource + "/actuators/ema-ref-1.json");
@@ -43,7 +37,6 @@ protected:
         std::ofstream(path) << doc.dump(2);
         return path;
     }
-    fs::path dir_;
 };
 
 TEST_F(HostileActuatorCli, CheckPrintsEveryProblemOfEachFileAndExitsOne) {
