@@ -116,7 +116,9 @@ std::optional<CurrentCalibration> read_calibration(ProfileReader& r, const json&
         if (!hex) r.problem(p, "must be a SHA-256 in 64 lowercase hexadecimal digits, not " + e->dump().substr(0, 80));
         else c.runs_sha256.push_back(e->get<std::string>());
     }
-    if (o->contains("runs_sha256") && c.runs_sha256.empty() && !r.any()) r.problem(at + "/runs_sha256", "must name at least one healthy run");
+    if (o->contains("runs_sha256") && o->at("runs_sha256").is_array() && o->at("runs_sha256").empty()) {
+        r.problem(at + "/runs_sha256", "must name at least one healthy run");
+    }
     c.calibrated_utc = r.text(*o, at, "calibrated_utc", kMaxNameChars, Null::refused).value_or("");
     return c;
 }

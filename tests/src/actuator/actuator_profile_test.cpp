@@ -51,6 +51,33 @@ TEST(ActuatorProfile, TheRigIsAStepperOnALinearOutputWithItsUnknownsNull) {
     EXPECT_THAT(unknown, ::testing::Contains("/drive/current_model/calibration"));
 }
 
+TEST(ActuatorProfile, ACalibratedCurrentModelLoadsWithItsCoefficientsPerDirection) {
+    json doc = json::parse(test::file_bytes(shipped_path("cranfield-linear-actuator.json")));
+    doc["drive"]["kind"] = "current_not_torque";
+    doc["drive"]["current_model"]["calibration"] = {
+        {"positive", {{"i0_a", 1.1}, {"load_opposing_a_per_n", 0.001}, {"load_aiding_a_per_n", -0.0005}, {"speed_a_s_per_m", 2.0}}},
+        {"negative", {{"i0_a", 1.0}, {"load_opposing_a_per_n", 0.002}, {"load_aiding_a_per_n", -0.0004}, {"speed_a_s_per_m", 3.0}}},
+        {"hold_current_a", 0.8},
+        {"residual_sd_a", 0.02},
+        {"samples", 3240},
+        {"runs_sha256", {std::string(64, 'a')}},
+        {"calibrated_utc", "2026-11-28T02:00:00Z"}};
+    const ActuatorProfile p = parse_actuator_profile(doc.dump(), "calibrated.json");
+    EXPECT_EQ(p.drive.kind, DriveKind::current_not_torque);
+    ASSERT_TRUE(p.drive.current_model && p.drive.current_model->calibration);
+    const CurrentCalibration& c = *p.drive.current_model->calibration;
+    EXPECT_EQ(c.positive.i0_a, 1.1);
+    EXPECT_EQ(c.negative.load_opposing_a_per_si, 0.002);
+    EXPECT_EQ(c.negative.load_aiding_a_per_si, -0.0004);
+    EXPECT_EQ(c.negative.speed_a_per_si, 3.0);
+    EXPECT_EQ(c.hold_current_a, 0.8);
+    EXPECT_EQ(c.samples, 3240u);
+    EXPECT_EQ(c.runs_sha256, std::vector<std::string>{std::string(64, 'a')});
+    doc["drive"]["current_model"]["calibration"]["runs_sha256"] = json::array();
+    EXPECT_THAT([&] { (void)parse_actuator_profile(doc.dump(), "calibrated.json"); },
+                ::testing::ThrowsMessage<ActuatorError>(HasSubstr("calibrated.json: /drive/current_model/calibration/runs_sha256: must name at least one healthy run")));
+}
+
 /// Every numeric leaf of `node` has a unit from its field name (or is dimensionless by name).
 void expect_units(const json& node, const std::string& path, const std::string& key) {
     if (node.is_object()) {
