@@ -54,55 +54,58 @@ inline D vclamp(D a, double lo, double hi) {
     return self::clamp_above(self::clamp_below(a, 0.0 + lo), 0.0 + hi);
 }
 
-/// One step with the command of step n, cmd_m = tau * radians(command_deg(t = n dt)), computed by
-/// the caller (it is shared by every lane and group of a batch).
-template <int W, bool kFull>
-inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m) {
+// The step's parts below are forced inline (as HWY_INLINE, not included on the scalar path): one body.
+#ifndef EMADIAG_STEP_INLINE
+#define EMADIAG_STEP_INLINE inline __attribute__((always_inline))
+#endif
+
+/// The lane types of W lanes, for the signatures of the step's parts.
+template <int W> using VecD = typename Vec<W>::D;
+template <int W> using VecM = typename Vec<W>::M;
+
+/// BRK: entering a ramp at the start of step n (sections 5 and 7): the phase of this step, whether
+/// it ramps and the ramp's current change per step.
+template <int W>
+EMADIAG_STEP_INLINE void brk_enter_ramp(const detail::Shared& s, Lanes<W>& z, long n, VecD<W>& phase, VecM<W>& ramping,
+                                        VecD<W>& ramp_rate) {
     using D = typename Vec<W>::D;
     using M = typename Vec<W>::M;
-    using detail::kPhaseHold0, detail::kPhaseRampUp, detail::kPhaseHold1, detail::kPhaseRampDown, detail::kPhaseHold2;
-    const detail::Shared& s = shared;
+    using detail::kPhaseHold0, detail::kPhaseRampUp, detail::kPhaseHold1, detail::kPhaseRampDown;
     const double dt = s.dt;
-    const double t = static_cast<double>(n) * dt;  // section 7: step n runs at t = n dt
-    const D zero{};
-    const D one = self::bcast<D>(1.0);
+    const double dn = static_cast<double>(n);
+    const M start_up = (phase == kPhaseHold0) & mask_of<M>(dn > static_cast<double>(s.brk_first_hold_steps));
+    const M start_down = (phase == kPhaseHold1) & (z.hold_end_n < dn);
+    const M start_ramp = start_up | start_down;
+    phase = sel(start_up, self::bcast<D>(kPhaseRampUp), sel(start_down, self::bcast<D>(kPhaseRampDown), phase));
+    z.ramp_i = sel(start_ramp, z.last_iref, z.ramp_i);
+    z.ramp_start_th = sel(start_ramp, z.th, z.ramp_start_th);
+    ramping = (phase == kPhaseRampUp) | (phase == kPhaseRampDown);
+    ramp_rate = sel(phase == kPhaseRampUp, self::bcast<D>(kBrkRampAPerS * dt), self::bcast<D>(0.0 - kBrkRampAPerS * dt));
+}
 
-    // BRK: entering a ramp at the start of this step (sections 5 and 7).
-    D phase = z.phase;
-    M ramping = M{};
-    D ramp_rate = zero;
-    if (s.sequence == Sequence::Brk) {
-        const double dn = static_cast<double>(n);
-        const M start_up = (phase == kPhaseHold0) & mask_of<M>(dn > static_cast<double>(s.brk_first_hold_steps));
-        const M start_down = (phase == kPhaseHold1) & (z.hold_end_n < dn);
-        const M start_ramp = start_up | start_down;
-        phase = sel(start_up, self::bcast<D>(kPhaseRampUp), sel(start_down, self::bcast<D>(kPhaseRampDown), phase));
-        z.ramp_i = sel(start_ramp, z.last_iref, z.ramp_i);
-        z.ramp_start_th = sel(start_ramp, z.th, z.ramp_start_th);
-        ramping = (phase == kPhaseRampUp) | (phase == kPhaseRampDown);
-        ramp_rate = sel(phase == kPhaseRampUp, self::bcast<D>(kBrkRampAPerS * dt), self::bcast<D>(0.0 - kBrkRampAPerS * dt));
-    }
+/// Step 2 of BRK: the current reference, the speed loop's or the ramp's where it ramps (the ramp
+/// advances by ramp_rate); kept as the last reference, where the next ramp starts.
+template <int W>
+EMADIAG_STEP_INLINE VecD<W> brk_current_ref(const detail::Shared& s, Lanes<W>& z, const VecD<W>& w_ref, const VecM<W>& ramping,
+                                            const VecD<W>& ramp_rate) {
+    using D = typename Vec<W>::D;
+    const D i_pos = vclamp(s.k_w * (w_ref - z.w), -s.i_max, s.i_max);
+    const D i_ref = sel(ramping, vclamp(z.ramp_i, -s.i_max, s.i_max), i_pos);
+    z.ramp_i = sel(ramping, z.ramp_i + ramp_rate, z.ramp_i);
+    z.last_iref = i_ref;
+    return i_ref;
+}
 
-    // 1. Command: cmd_m (shared by all lanes).
-    // 2. Controller.
-    const D w_ref = vclamp(s.k_theta * (cmd_m - z.th), -s.w_max, s.w_max);
-    D i_ref = zero;  // BRK only: the other sequences compare with I_ref's clamp below without forming it
-    if (s.sequence == Sequence::Brk) {
-        const D i_pos = vclamp(s.k_w * (w_ref - z.w), -s.i_max, s.i_max);
-        i_ref = sel(ramping, vclamp(z.ramp_i, -s.i_max, s.i_max), i_pos);
-        z.ramp_i = sel(ramping, z.ramp_i + ramp_rate, z.ramp_i);
-        z.last_iref = i_ref;
-    }
-
-    // 3. Motor: bang-bang voltage, R-L with BEMF (paper section 2.2).
-    const D i0 = z.i;
-    const D w0 = z.w;
-    // I += dt (V - k_t w - R I) / L with V = V_dc sgn(I_ref - I), arranged so that only the selects
-    // follow the sign decision (the step's critical path): the three candidate currents are ready
-    // before it. sgn(I_ref - I) compares I_ref with I directly (the same for every finite or infinite
-    // pair: a difference of two different doubles is never zero), and I_base + (-dt V_dc / L) is
-    // exactly I_base - dt V_dc / L.
-    M v_up, v_down;
+/// Step 3, the motor's bang-bang voltage V = V_dc sgn(I_ref - I): v_up where +V_dc, v_down where -V_dc.
+/// I += dt (V - k_t w - R I) / L with V = V_dc sgn(I_ref - I), arranged so that only the selects
+/// follow the sign decision (the step's critical path): the three candidate currents are ready
+/// before it. sgn(I_ref - I) compares I_ref with I directly (the same for every finite or infinite
+/// pair: a difference of two different doubles is never zero), and I_base + (-dt V_dc / L) is
+/// exactly I_base - dt V_dc / L.
+template <int W>
+EMADIAG_STEP_INLINE void voltage_decision(const detail::Shared& s, const VecD<W>& w_ref, const VecD<W>& i_ref, const VecD<W>& i0,
+                                          const VecD<W>& w0, VecM<W>& v_up, VecM<W>& v_down) {
+    using D = typename Vec<W>::D;
     if (s.sequence == Sequence::Brk) {
         v_up = i_ref > i0;
         v_down = i_ref < i0;
@@ -123,6 +126,176 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
         v_up = ((y > i0) | (-s.i_max > i0)) & (s.i_max > i0);
         v_down = ((y < i0) & (-s.i_max < i0)) | (s.i_max < i0);
     }
+}
+
+/// kFull, step 5: the effects beyond the datasheet (ripple on T_M, spall and Stribeck friction) use sin
+/// and exp: lane by lane, the same library calls as the scalar path. Without ripple, spall and Stribeck
+/// in any lane the loop below would leave T_M as it is and give +0 for both extras: the step skips it.
+template <int W>
+EMADIAG_STEP_INLINE void lane_effects(const detail::Shared& s, const Lanes<W>& z, const VecD<W>& th_load, const VecD<W>& w0,
+                                      VecD<W>& t_m, VecD<W>& extra_dyn, VecD<W>& extra_stat) {
+    using D = typename Vec<W>::D;
+    double tm_a[W], th_a[W], thl_a[W], w0_a[W], dyn_a[W], stat_a[W];
+    to_array(t_m, tm_a);
+    to_array(z.th, th_a);
+    to_array(th_load, thl_a);
+    to_array(w0, w0_a);
+    // Each lane has its own effect parameters (z.fx); an effect whose amplitude is zero adds
+    // nothing and is skipped (a ripple of amplitude 0 would add +/-0 to T_M; Stribeck's 0 * exp
+    // adds +0), so lanes without effects, such as a batch's padding, cost no library call.
+    for (int l = 0; l < W; ++l) {
+        const Effects& fx = z.fx[l];
+        if (fx.ripple_amplitude_nm != 0.0) tm_a[l] += fx.ripple_amplitude_nm * std::sin(fx.ripple_periods_per_rev * th_a[l]);
+        const double spall = fx.spall_amplitude_nm == 0.0 ? 0.0
+            : fx.spall_amplitude_nm *
+                  std::exp(-0.5 * std::pow((detail::rad2deg(thl_a[l] * s.inv_tau) - fx.spall_center_deg) /
+                                               fx.spall_width_deg, 2));
+        double stribeck = 0.0;
+        if (fx.stribeck_amplitude_nm != 0.0) {
+            const double wr = w0_a[l] / fx.stribeck_speed_rad_s;
+            stribeck = fx.stribeck_amplitude_nm * std::exp(-wr * wr);
+        }
+        dyn_a[l] = spall + stribeck;
+        stat_a[l] = spall;
+    }
+    t_m = self::from_array<D>(tm_a);
+    extra_dyn = self::from_array<D>(dyn_a);
+    extra_stat = self::from_array<D>(stat_a);
+}
+
+/// kFull: the extra torque T_x of the terms as data (term_hook.hpp), each lane its own terms,
+/// evaluated for all lanes in one call that gives each lane the scalar path's value bit for bit.
+template <int W>
+EMADIAG_STEP_INLINE VecD<W> torque_terms_of(const detail::Shared& s, const Lanes<W>& z, long n, const VecD<W>& w0,
+                                            const VecD<W>& th_load, const VecD<W>& f_r, const VecD<W>& i1) {
+    using D = typename Vec<W>::D;
+    const double dt = s.dt;
+    double w_a[W], thm_a[W], thu_a[W], fr_a[W], i_a[W], tx_a[W];
+    to_array(w0, w_a);
+    to_array(z.th, thm_a);
+    to_array(th_load * s.inv_tau, thu_a);
+    to_array(f_r, fr_a);
+    to_array(i1, i_a);
+    detail::torque_terms_lanes(W, z.torque_terms, w_a, thm_a, thu_a, fr_a, static_cast<double>(n) * dt, i_a, tx_a);
+    return self::from_array<D>(tx_a);
+}
+
+/// Step 5, the direction of friction d = +1 where d_pos, else -1: sgn(w) while moving, sgn(T_act)
+/// (-1 at 0) while stuck; and the load coefficient c of eq. (3) that F_R d selects.
+template <int W>
+EMADIAG_STEP_INLINE VecD<W> friction_direction(const Lanes<W>& z, const VecD<W>& w0, const VecD<W>& t_act, const VecD<W>& f_r,
+                                               const VecM<W>& still, const VecM<W>& w_pos, VecM<W>& d_pos, VecD<W>& d_sign) {
+    using D = typename Vec<W>::D;
+    using M = typename Vec<W>::M;
+    const D zero{};
+    if constexpr (W == 1) {
+        d_pos = w_pos | (still & (t_act > 0.0));
+    } else {
+        // The same mask in a blend and a compare (one op and one mask fewer), kept as a sign bit:
+        // x d = x ^ d_sign (Neg flips the sign bit), so the mask dies here (AVX-512 has 8 mask
+        // registers for K groups' masks).
+        d_pos = sel(still, t_act, w0) > 0.0;
+        d_sign = self::zero_if(d_pos, -zero);
+    }
+    // c_opp where F_R d > 0 (opposing: F_R > 0 for d = +1, F_R < 0 for d = -1), else c_aid.
+    D c;
+    if constexpr (W == 1) {
+        const M opposing = (d_pos & (f_r > 0.0)) | (vnot(d_pos) & (f_r < 0.0));
+        c = sel(opposing, z.c_opp, z.c_aid);
+    } else {
+        // The same choice in blends: fewer live masks (AVX-512 has 8 mask registers; K groups of
+        // masks spill to general registers) and no mask logic. F_R d > 0 as (d_pos ? F_R : -F_R) > 0
+        // (-(-0) = +0 is not > 0, NaN is not): one compare and one blend fewer.
+        c = sel(self::vxor(f_r, d_sign) > 0.0, z.c_opp, z.c_aid);
+    }
+    return c;
+}
+
+/// Step 5's new speed w_new: 0 (stuck, or a moving shaft whose speed would change sign) or w_free.
+/// The two forms below give the same value in every case; the faster one differs between the scalar
+/// step (one decision, one select) and the vector step (blends). d_sign is read by the vector step
+/// only (the scalar step leaves it unset).
+template <int W>
+EMADIAG_STEP_INLINE VecD<W> speed_after_friction(const VecD<W>& w_free, [[maybe_unused]] const VecD<W>& t_act,
+                                                 [[maybe_unused]] const VecD<W>& stat, [[maybe_unused]] const VecD<W>& d_sign,
+                                                 [[maybe_unused]] const VecM<W>& stuck, [[maybe_unused]] const VecM<W>& still,
+                                                 [[maybe_unused]] const VecM<W>& moving, [[maybe_unused]] const VecM<W>& w_pos) {
+    using D = typename Vec<W>::D;
+    using M = typename Vec<W>::M;
+    D w1;
+    if constexpr (W == 1) {
+        const M to_zero = stuck | (w_pos & (w_free < 0.0)) | ((moving & vnot(w_pos)) & (w_free > 0.0));
+        w1 = self::zero_if(to_zero, w_free);
+    } else {
+        // sel(w_free < 0, 0, w_free) and sel(w_free > 0, 0, w_free): one max / min with +0 each.
+        // Moving, d_pos is w_pos (NaN w: both false), and min(+0, x) is -max(-0, -x) per lane (NaN and
+        // signed zeros included), so with d_sign = +0 / -0: w_slip = max(d_sign, w_free d) d, and
+        // neither w_pos nor stuck stays live as a mask (the static case tests |T_act| <= stat here).
+        const D w_slip = self::vxor(self::vmax(d_sign, self::vxor(w_free, d_sign)), d_sign);
+        // Most steps have every lane of a group moving: the static lanes' selects only when one is.
+        w1 = w_slip;
+        if (self::any(still)) w1 = sel(still, self::zero_if(vabs(t_act) <= stat, w_free), w_slip);
+    }
+    return w1;
+}
+
+/// kFull: the electrical energy accounts of one step, sum V I dt in and sum R I^2 dt of copper loss
+/// (I the mean of the step's start and end currents).
+template <int W>
+EMADIAG_STEP_INLINE void electrical_energy(const detail::Shared& s, Lanes<W>& z, const VecM<W>& v_up, const VecM<W>& v_down,
+                                           const VecD<W>& i0, const VecD<W>& i1) {
+    using D = typename Vec<W>::D;
+    const double dt = s.dt;
+    const D v = sel(v_up, self::bcast<D>(s.v_dc), self::keep_if(v_down, self::bcast<D>(0.0 - s.v_dc)));
+    const D i_avg = 0.5 * (i0 + i1);
+    z.e_in = z.e_in + v * i_avg * dt;
+    z.e_cu = z.e_cu + s.r * i0 * i_avg * dt;
+}
+
+/// BRK: the end of a ramp after the position update; the next hold starts on the next step.
+template <int W>
+EMADIAG_STEP_INLINE void brk_end_ramp(const detail::Shared& s, Lanes<W>& z, long n, const VecD<W>& th1, const VecD<W>& phase,
+                                      const VecM<W>& ramping) {
+    using D = typename Vec<W>::D;
+    using M = typename Vec<W>::M;
+    using detail::kPhaseRampUp, detail::kPhaseHold1, detail::kPhaseHold2;
+    const M moved = ramping & (vabs(th1 - z.ramp_start_th) >= kBrkMoveRad);
+    const M up = phase == kPhaseRampUp;
+    z.hold_end_n = sel(moved & up, self::bcast<D>(static_cast<double>(n) + static_cast<double>(s.brk_mid_hold_steps)),
+                       z.hold_end_n);
+    z.phase = sel(moved, sel(up, self::bcast<D>(kPhaseHold1), self::bcast<D>(kPhaseHold2)), phase);
+}
+
+/// One step with the command of step n, cmd_m = tau * radians(command_deg(t = n dt)), computed by
+/// the caller (it is shared by every lane and group of a batch).
+template <int W, bool kFull>
+inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m) {
+    using D = typename Vec<W>::D;
+    using M = typename Vec<W>::M;
+    const detail::Shared& s = shared;
+    const double dt = s.dt;
+    const double t = static_cast<double>(n) * dt;  // section 7: step n runs at t = n dt
+    const D zero{};
+    const D one = self::bcast<D>(1.0);
+
+    // BRK: entering a ramp at the start of this step (sections 5 and 7).
+    D phase = z.phase;
+    M ramping = M{};
+    D ramp_rate = zero;
+    if (s.sequence == Sequence::Brk) self::brk_enter_ramp<W>(s, z, n, phase, ramping, ramp_rate);
+
+    // 1. Command: cmd_m (shared by all lanes).
+    // 2. Controller.
+    const D w_ref = vclamp(s.k_theta * (cmd_m - z.th), -s.w_max, s.w_max);
+    D i_ref = zero;  // BRK only: the other sequences compare with I_ref's clamp below without forming it
+    if (s.sequence == Sequence::Brk) i_ref = self::brk_current_ref<W>(s, z, w_ref, ramping, ramp_rate);
+
+    // 3. Motor: bang-bang voltage, R-L with BEMF (paper section 2.2).
+    const D i0 = z.i;
+    const D w0 = z.w;
+    // I += dt (V - k_t w - R I) / L, the sign decision first (voltage_decision).
+    M v_up, v_down;
+    self::voltage_decision<W>(s, w_ref, i_ref, i0, w0, v_up, v_down);
     const D i_base = i0 - s.dt_over_l * (s.k_t * w0 + s.r * i0);
     const double di_v = s.dt_over_l * s.v_dc;
     D i1;
@@ -157,85 +330,24 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     D extra_dyn = zero, extra_stat = zero, viscous = zero;
     M in_gap = M{};
     if constexpr (kFull) {
-        // The effects beyond the datasheet use sin and exp: lane by lane, the same library calls as
-        // the scalar path. Without ripple, spall and Stribeck in any lane the loop below would leave
-        // T_M as it is and give +0 for both extras: skipped.
-        if (z.any_lane_effects) {
-            double tm_a[W], th_a[W], thl_a[W], w0_a[W], dyn_a[W], stat_a[W];
-            to_array(t_m, tm_a);
-            to_array(z.th, th_a);
-            to_array(th_load, thl_a);
-            to_array(w0, w0_a);
-            // Each lane has its own effect parameters (z.fx); an effect whose amplitude is zero adds
-            // nothing and is skipped (a ripple of amplitude 0 would add +/-0 to T_M; Stribeck's 0 * exp
-            // adds +0), so lanes without effects, such as a batch's padding, cost no library call.
-            for (int l = 0; l < W; ++l) {
-                const Effects& fx = z.fx[l];
-                if (fx.ripple_amplitude_nm != 0.0) tm_a[l] += fx.ripple_amplitude_nm * std::sin(fx.ripple_periods_per_rev * th_a[l]);
-                const double spall = fx.spall_amplitude_nm == 0.0 ? 0.0
-                    : fx.spall_amplitude_nm *
-                          std::exp(-0.5 * std::pow((detail::rad2deg(thl_a[l] * s.inv_tau) - fx.spall_center_deg) /
-                                                       fx.spall_width_deg, 2));
-                double stribeck = 0.0;
-                if (fx.stribeck_amplitude_nm != 0.0) {
-                    const double wr = w0_a[l] / fx.stribeck_speed_rad_s;
-                    stribeck = fx.stribeck_amplitude_nm * std::exp(-wr * wr);
-                }
-                dyn_a[l] = spall + stribeck;
-                stat_a[l] = spall;
-            }
-            t_m = self::from_array<D>(tm_a);
-            extra_dyn = self::from_array<D>(dyn_a);
-            extra_stat = self::from_array<D>(stat_a);
-        }
+        // Without ripple, spall and Stribeck in any lane: skipped (see lane_effects).
+        if (z.any_lane_effects) self::lane_effects<W>(s, z, th_load, w0, t_m, extra_dyn, extra_stat);
         viscous = z.viscous * w0;
         // Backlash: inside the free play the load and the transmission friction are not felt.
         if (s.fx.backlash_rad > 0.0) in_gap = vabs(z.gap) < 0.5 * s.fx.backlash_rad;
         f_r = self::zero_if(in_gap, f_r);
     }
-    // Terms as data (term_hook.hpp): an extra torque T_x, each lane its own terms, evaluated for all
-    // lanes in one call that gives each lane the scalar path's value bit for bit.
+    // Terms as data (term_hook.hpp): an extra torque T_x (torque_terms_of).
     D t_x = zero;
-    if constexpr (kFull) {
-        if (z.any_torque_terms) {
-            double w_a[W], thm_a[W], thu_a[W], fr_a[W], i_a[W], tx_a[W];
-            to_array(w0, w_a);
-            to_array(z.th, thm_a);
-            to_array(th_load * s.inv_tau, thu_a);
-            to_array(f_r, fr_a);
-            to_array(i1, i_a);
-            detail::torque_terms_lanes(W, z.torque_terms, w_a, thm_a, thu_a, fr_a, static_cast<double>(n) * dt, i_a, tx_a);
-            t_x = self::from_array<D>(tx_a);
-        }
-    }
+    if constexpr (kFull) { if (z.any_torque_terms) t_x = self::torque_terms_of<W>(s, z, n, w0, th_load, f_r, i1); }
     D t_act = t_m - f_r;
     if constexpr (kFull) t_act = t_act - t_x;  // without terms x - (+0) = x: the fast step skips it
     const M still = w0 == 0.0;
     const M moving = vnot(still);
     const M w_pos = w0 > 0.0;
-    // Direction d = +1 where d_pos, else -1: sgn(w) while moving, sgn(T_act) (-1 at 0) while stuck.
     M d_pos;
     D d_sign;  // vector step: -0 (the sign bit) where d = -1, +0 where d = +1
-    if constexpr (W == 1) {
-        d_pos = w_pos | (still & (t_act > 0.0));
-    } else {
-        // The same mask in a blend and a compare (one op and one mask fewer), kept as a sign bit:
-        // x d = x ^ d_sign (Neg flips the sign bit), so the mask dies here (AVX-512 has 8 mask
-        // registers for K groups' masks).
-        d_pos = sel(still, t_act, w0) > 0.0;
-        d_sign = self::zero_if(d_pos, -zero);
-    }
-    // c_opp where F_R d > 0 (opposing: F_R > 0 for d = +1, F_R < 0 for d = -1), else c_aid.
-    D c;
-    if constexpr (W == 1) {
-        const M opposing = (d_pos & (f_r > 0.0)) | (vnot(d_pos) & (f_r < 0.0));
-        c = sel(opposing, z.c_opp, z.c_aid);
-    } else {
-        // The same choice in blends: fewer live masks (AVX-512 has 8 mask registers; K groups of
-        // masks spill to general registers) and no mask logic. F_R d > 0 as (d_pos ? F_R : -F_R) > 0
-        // (-(-0) = +0 is not > 0, NaN is not): one compare and one blend fewer.
-        c = sel(self::vxor(f_r, d_sign) > 0.0, z.c_opp, z.c_aid);
-    }
+    const D c = self::friction_direction<W>(z, w0, t_act, f_r, still, w_pos, d_pos, d_sign);
     const D c_fr = c * vabs(f_r);
     D dyn = z.fdj + c_fr;
     D stat = z.fsj + c_fr;
@@ -262,23 +374,7 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     }
     // A moving shaft whose speed would change sign stops instead (max/min with 0 keep it one op deep).
     const M reversal_stop = moving & (w_free * w0 < 0.0);
-    // w_new is 0 (stuck, or a moving shaft whose speed would change sign) or w_free. The two forms
-    // below give the same value in every case; the faster one differs between the scalar step
-    // (one decision, one select) and the vector step (blends).
-    D w1;
-    if constexpr (W == 1) {
-        const M to_zero = stuck | (w_pos & (w_free < 0.0)) | ((moving & vnot(w_pos)) & (w_free > 0.0));
-        w1 = self::zero_if(to_zero, w_free);
-    } else {
-        // sel(w_free < 0, 0, w_free) and sel(w_free > 0, 0, w_free): one max / min with +0 each.
-        // Moving, d_pos is w_pos (NaN w: both false), and min(+0, x) is -max(-0, -x) per lane (NaN and
-        // signed zeros included), so with d_sign = +0 / -0: w_slip = max(d_sign, w_free d) d, and
-        // neither w_pos nor stuck stays live as a mask (the static case tests |T_act| <= stat here).
-        const D w_slip = self::vxor(self::vmax(d_sign, self::vxor(w_free, d_sign)), d_sign);
-        // Most steps have every lane of a group moving: the static lanes' selects only when one is.
-        w1 = w_slip;
-        if (self::any(still)) w1 = sel(still, self::zero_if(vabs(t_act) <= stat, w_free), w_slip);
-    }
+    D w1 = self::speed_after_friction<W>(w_free, t_act, stat, d_sign, stuck, still, moving, w_pos);
 
     // 6. Position and end stops.
     D th1 = z.th + dt * w1;
@@ -298,10 +394,7 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     if constexpr (kFull) {
         const double half = 0.5 * s.fx.backlash_rad;
         z.gap = vclamp(z.gap + (th1 - z.th), -half, half);
-        const D v = sel(v_up, self::bcast<D>(s.v_dc), self::keep_if(v_down, self::bcast<D>(0.0 - s.v_dc)));
-        const D i_avg = 0.5 * (i0 + i1);
-        z.e_in = z.e_in + v * i_avg * dt;
-        z.e_cu = z.e_cu + s.r * i0 * i_avg * dt;
+        self::electrical_energy<W>(s, z, v_up, v_down, i0, i1);
         const D w_avg = 0.5 * (w0 + w1);
         z.e_fr = z.e_fr + t_f * w_avg * dt;
         z.e_load = z.e_load + (f_r + t_x) * w_avg * dt;
@@ -318,13 +411,7 @@ inline void step(const detail::Shared& shared, Lanes<W>& z, long n, double cmd_m
     z.w = w1;
 
     // BRK: end of a ramp after the position update; the next hold starts on the next step.
-    if (s.sequence == Sequence::Brk) {
-        const M moved = ramping & (vabs(th1 - z.ramp_start_th) >= kBrkMoveRad);
-        const M up = phase == kPhaseRampUp;
-        z.hold_end_n = sel(moved & up, self::bcast<D>(static_cast<double>(n) + static_cast<double>(s.brk_mid_hold_steps)),
-                           z.hold_end_n);
-        z.phase = sel(moved, sel(up, self::bcast<D>(kPhaseHold1), self::bcast<D>(kPhaseHold2)), phase);
-    }
+    if (s.sequence == Sequence::Brk) self::brk_end_ramp<W>(s, z, n, th1, phase, ramping);
 
     // Period means (section 7): I after step 3, w after step 6, the H used in step 4.
     z.sum_i = z.sum_i + i1;

@@ -229,6 +229,57 @@ std::string bigint_array(const std::vector<Row>& rows, Id id) {
     }
     return a + "}";
 }
+
+/// The runs of the sessions `out` (ids in id_array, positions in index), each with its estimates: put
+/// in their sessions' runs, in run_id order.
+void attach_runs(PgConnection& pg, const std::string& id_array, const std::unordered_map<std::int64_t, std::size_t>& index,
+                 std::vector<StoredTestSession>& out) {
+    std::vector<StoredRun> runs;
+    std::unordered_map<std::int64_t, std::size_t> run_index;
+    pg.each_row(
+        "SELECT r.run_id, r.tail_number, r.actuator_serial, r.started_utc, r.source, r.load_case, r.sequence, "
+        "r.k_t_nm_per_a, r.j_kgm2, r.tau, r.sample_period_s, r.valid, r.status_note, r.meta_json, r.session_id "
+        "FROM runs r WHERE r.session_id = ANY($1::bigint[]) ORDER BY r.run_id",
+        {id_array}, [&](const Row& r) {
+            StoredRun run;
+            run.run_id = int_of(r, 0);
+            run.tail_number = text(r, 1);
+            run.actuator_serial = text(r, 2);
+            run.started_utc = text(r, 3);
+            run.source = text(r, 4);
+            run.load_case = text(r, 5);
+            run.sequence = text(r, 6);
+            run.k_t_nm_per_a = num(r, 7);
+            run.j_kgm2 = num(r, 8);
+            run.tau = num(r, 9);
+            run.sample_period_s = num(r, 10);
+            run.valid = boolean(r, 11);
+            run.status_note = text(r, 12);
+            run.meta_json = text(r, 13);
+            run.session_id = int_of(r, 14);
+            runs.push_back(std::move(run));
+            run_index[runs.back().run_id] = runs.size() - 1;
+        });
+    if (!runs.empty()) {
+        const std::string run_array = bigint_array(runs, [](const StoredRun& r) { return r.run_id; });
+        pg.each_row(
+            "SELECT e.run_id, e.estimator, e.parameter, e.value, e.std_error, e.identifiable, e.method, e.note "
+            "FROM estimates e WHERE e.run_id = ANY($1::bigint[]) ORDER BY e.run_id, e.estimator, e.parameter",
+            {run_array}, [&](const Row& r) {
+                StoredEstimate e;
+                e.estimator = text(r, 1);
+                e.parameter = text(r, 2);
+                e.value = opt_num(r, 3);
+                e.std_error = num(r, 4);
+                e.identifiable = boolean(r, 5);
+                e.method = text(r, 6);
+                e.note = text(r, 7);
+                runs[run_index.at(int_of(r, 0))].estimates.push_back(std::move(e));
+            });
+    }
+    for (auto& run : runs) out[index.at(*run.session_id)].runs.push_back(std::move(run));
+}
+
 }  // namespace
 
 std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string& where, const std::string& value, const SessionListParts& parts,
@@ -371,50 +422,7 @@ std::vector<StoredTestSession> PgRecordSource::sessions_where(const std::string&
                 out[index.at(int_of(r, 0))].artifacts.push_back({text(r, 1), text(r, 2), text(r, 3)});
             });
     if (!parts.runs) return out;
-    std::vector<StoredRun> runs;
-    std::unordered_map<std::int64_t, std::size_t> run_index;
-    pg_.each_row(
-        "SELECT r.run_id, r.tail_number, r.actuator_serial, r.started_utc, r.source, r.load_case, r.sequence, "
-        "r.k_t_nm_per_a, r.j_kgm2, r.tau, r.sample_period_s, r.valid, r.status_note, r.meta_json, r.session_id "
-        "FROM runs r WHERE r.session_id = ANY($1::bigint[]) ORDER BY r.run_id",
-        {id_array}, [&](const Row& r) {
-            StoredRun run;
-            run.run_id = int_of(r, 0);
-            run.tail_number = text(r, 1);
-            run.actuator_serial = text(r, 2);
-            run.started_utc = text(r, 3);
-            run.source = text(r, 4);
-            run.load_case = text(r, 5);
-            run.sequence = text(r, 6);
-            run.k_t_nm_per_a = num(r, 7);
-            run.j_kgm2 = num(r, 8);
-            run.tau = num(r, 9);
-            run.sample_period_s = num(r, 10);
-            run.valid = boolean(r, 11);
-            run.status_note = text(r, 12);
-            run.meta_json = text(r, 13);
-            run.session_id = int_of(r, 14);
-            runs.push_back(std::move(run));
-            run_index[runs.back().run_id] = runs.size() - 1;
-        });
-    if (!runs.empty()) {
-        const std::string run_array = bigint_array(runs, [](const StoredRun& r) { return r.run_id; });
-        pg_.each_row(
-            "SELECT e.run_id, e.estimator, e.parameter, e.value, e.std_error, e.identifiable, e.method, e.note "
-            "FROM estimates e WHERE e.run_id = ANY($1::bigint[]) ORDER BY e.run_id, e.estimator, e.parameter",
-            {run_array}, [&](const Row& r) {
-                StoredEstimate e;
-                e.estimator = text(r, 1);
-                e.parameter = text(r, 2);
-                e.value = opt_num(r, 3);
-                e.std_error = num(r, 4);
-                e.identifiable = boolean(r, 5);
-                e.method = text(r, 6);
-                e.note = text(r, 7);
-                runs[run_index.at(int_of(r, 0))].estimates.push_back(std::move(e));
-            });
-    }
-    for (auto& run : runs) out[index.at(*run.session_id)].runs.push_back(std::move(run));
+    attach_runs(pg_, id_array, index, out);
     return out;
 }
 
