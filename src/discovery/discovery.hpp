@@ -14,11 +14,11 @@
 //      trajectory, 7. a final refit on the trajectory and the residual structure.
 // Only the Run's samples, constants, case and sequence are read: never true_* / effect_* metadata.
 #include "core/run.hpp"
-#include "discovery/augmented_model.hpp"
-#include "discovery/effect_screen.hpp"
-#include "discovery/resimulation.hpp"
-#include "discovery/sparse_select.hpp"
-#include "discovery/trajectory.hpp"
+#include "discovery/model/augmented_model.hpp"
+#include "discovery/screening/effect_screen.hpp"
+#include "discovery/model/resimulation.hpp"
+#include "discovery/screening/sparse_select.hpp"
+#include "discovery/model/trajectory.hpp"
 
 #include <nlohmann/json.hpp>
 

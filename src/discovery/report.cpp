@@ -1,7 +1,7 @@
 // The discovery report: its summary, the effects added and the JSON (discovery.hpp).
 #include "discovery/discovery.hpp"
 
-#include "discovery/screen_windows.hpp"
+#include "discovery/screening/screen_windows.hpp"
 #include "discovery/stages/context.hpp"
 
 #include <cstdio>

@@ -2,9 +2,9 @@
 // The one context discovery's stages read and write (src/discovery/README.md): the run and its
 // signals, the noise floor and the comparison mask, the model being built and the report.
 // discover() (discovery.cpp) makes it and runs the stages (stages.hpp) on it in order.
-#include "discovery/candidate_effect.hpp"
+#include "discovery/screening/candidate_effect.hpp"
 #include "discovery/discovery.hpp"
-#include "discovery/term_library.hpp"
+#include "discovery/screening/term_library.hpp"
 
 #include <cstdint>
 #include <limits>

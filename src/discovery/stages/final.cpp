@@ -3,7 +3,7 @@
 #include "discovery/stages/stages.hpp"
 
 #include "discovery/fits/fits.hpp"
-#include "discovery/screen_windows.hpp"
+#include "discovery/screening/screen_windows.hpp"
 
 #include <algorithm>
 #include <string>

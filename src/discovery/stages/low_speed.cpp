@@ -6,7 +6,7 @@
 
 #include "discovery/fits/fits.hpp"
 #include "discovery/fits/linearisation.hpp"
-#include "discovery/screen_windows.hpp"
+#include "discovery/screening/screen_windows.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -5,7 +5,7 @@
 
 #include "discovery/fits/fits.hpp"
 #include "discovery/physics_names.hpp"
-#include "discovery/screen_windows.hpp"
+#include "discovery/screening/screen_windows.hpp"
 #include "discovery/stages/hypotheses.hpp"
 
 #include <algorithm>

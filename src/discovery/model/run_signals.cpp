@@ -1,4 +1,4 @@
-#include "discovery/run_signals.hpp"
+#include "discovery/model/run_signals.hpp"
 
 #include "core/residual_torque.hpp"
 #include "emadiag/sim/ema_params.hpp"

@@ -3,8 +3,8 @@
 // re-simulation (docs/discovery.md "Fit"). The run's case, sequence, length and constants (k_t,
 // J, tau) come from the Run; noise is none; nothing is read from true_* / effect_* metadata.
 #include "core/run.hpp"
-#include "discovery/run_signals.hpp"
-#include "discovery/trajectory.hpp"
+#include "discovery/model/run_signals.hpp"
+#include "discovery/model/trajectory.hpp"
 #include "emadiag/sim/ema_params.hpp"
 #include "emadiag/sim/simulator.hpp"
 

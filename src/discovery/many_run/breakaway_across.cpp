@@ -1,11 +1,11 @@
-#include "discovery/breakaway_across.hpp"
+#include "discovery/many_run/breakaway_across.hpp"
 
 #include "core/emadiag_error.hpp"
-#include "discovery/model_correction.hpp"
+#include "discovery/model/model_correction.hpp"
 #include "discovery/physics_names.hpp"
-#include "discovery/screen_windows.hpp"
-#include "discovery/resimulation.hpp"
-#include "discovery/run_signals.hpp"
+#include "discovery/screening/screen_windows.hpp"
+#include "discovery/model/resimulation.hpp"
+#include "discovery/model/run_signals.hpp"
 #include "estimation/breakaway.hpp"
 #include "estimation/health_estimate.hpp"
 

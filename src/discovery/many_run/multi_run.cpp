@@ -1,12 +1,12 @@
-#include "discovery/multi_run.hpp"
+#include "discovery/many_run/multi_run.hpp"
 
 #include "core/emadiag_error.hpp"
-#include "discovery/across_loads.hpp"
-#include "discovery/breakaway_across.hpp"
+#include "discovery/many_run/across_loads.hpp"
+#include "discovery/many_run/breakaway_across.hpp"
 #include "discovery/physics_names.hpp"
-#include "discovery/screen_windows.hpp"
+#include "discovery/screening/screen_windows.hpp"
 #include "estimation/health_estimate.hpp"
-#include "discovery/term_library.hpp"
+#include "discovery/screening/term_library.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -3,8 +3,8 @@
 // the generated term library): the comparison samples grouped into windows of up to
 // kScreenWindowSamples consecutive samples, each regression row a window SUM, and the base columns
 // projected out of the residual (effect_screen.hpp says why windows).
-#include "discovery/effect_screen.hpp"
-#include "discovery/run_signals.hpp"
+#include "discovery/screening/effect_screen.hpp"
+#include "discovery/model/run_signals.hpp"
 
 #include <Eigen/Dense>
 

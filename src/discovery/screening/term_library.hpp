@@ -11,7 +11,7 @@
 // Left out because the model or the library already holds them: sgn(w) (FDJ), sgn(w)|F_R| (eta),
 // w (viscous), 1 and I (hinge offset, current gain: hypotheses.hpp adds the alternatives),
 // sgn(w) gauss (spall), sgn(w) exp(-(w/w_s)^2) (Stribeck), integer ripple per rev.
-#include "discovery/run_signals.hpp"
+#include "discovery/model/run_signals.hpp"
 #include "emadiag/sim/terms.hpp"
 
 #include <string>

@@ -1,7 +1,7 @@
-#include "discovery/trajectory.hpp"
+#include "discovery/model/trajectory.hpp"
 
-#include "discovery/effect_screen.hpp"
-#include "discovery/term_library.hpp"
+#include "discovery/screening/effect_screen.hpp"
+#include "discovery/screening/term_library.hpp"
 #include "emadiag/sim/simulator.hpp"
 
 #include <algorithm>

@@ -1,5 +1,5 @@
-#include "discovery/candidate_effect.hpp"
-#include "discovery/screen_windows.hpp"
+#include "discovery/screening/candidate_effect.hpp"
+#include "discovery/screening/screen_windows.hpp"
 
 #include "core/emadiag_error.hpp"
 

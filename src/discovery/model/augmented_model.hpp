@@ -8,7 +8,7 @@
 //               "name": "friction_deflection", "physics": "friction growing with ..."}],  (terms as data)
 //    "error_before": {...}, "error_after": {...},
 //    "sim_params": {...}}   (EmaParams::to_json(): what `emadiag simulate --params` reads)
-#include "discovery/resimulation.hpp"
+#include "discovery/model/resimulation.hpp"
 #include "emadiag/sim/ema_params.hpp"
 
 #include <nlohmann/json.hpp>

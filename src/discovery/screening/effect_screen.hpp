@@ -14,8 +14,8 @@
 // with n the number of windows. A candidate is accepted when delta_BIC > kMinDeltaBic, its amplitude has the physical sign, and
 // the largest torque it makes on the compared samples, |a| max|x_k|, is at least kMinEffectPeakNm:
 // below that the effect does not matter for the actuator's health (it is 6 % of the datasheet FDJ).
-#include "discovery/candidate_effect.hpp"
-#include "discovery/run_signals.hpp"
+#include "discovery/screening/candidate_effect.hpp"
+#include "discovery/model/run_signals.hpp"
 
 #include <string>
 #include <optional>

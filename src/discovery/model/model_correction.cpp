@@ -1,4 +1,4 @@
-#include "discovery/model_correction.hpp"
+#include "discovery/model/model_correction.hpp"
 
 #include "core/emadiag_error.hpp"
 

@@ -1,7 +1,7 @@
-#include "discovery/augmented_model.hpp"
+#include "discovery/model/augmented_model.hpp"
 
 #include "core/emadiag_error.hpp"
-#include "discovery/candidate_effect.hpp"
+#include "discovery/screening/candidate_effect.hpp"
 #include "emadiag/sim/sim_error.hpp"
 #include "estimation/health_estimate.hpp"
 

@@ -17,7 +17,7 @@
 // need more: a health value fitted within its uncertainty still moves the closed-loop trajectory by
 // about the sensor noise (an FDJ error of 1e-3 N m needs 0.005 A more current and leaves 0.7 mrad of
 // position error through the speed and position loops), so clean runs show 1.0 to 1.3 x the floor there.
-#include "discovery/run_signals.hpp"
+#include "discovery/model/run_signals.hpp"
 
 #include <optional>
 #include <string>

@@ -1,11 +1,11 @@
-#include "discovery/across_loads.hpp"
+#include "discovery/many_run/across_loads.hpp"
 
 #include "discovery/physics_names.hpp"
-#include "discovery/screen_windows.hpp"
-#include "discovery/resimulation.hpp"
-#include "discovery/effect_screen.hpp"
-#include "discovery/run_signals.hpp"
-#include "discovery/term_library.hpp"
+#include "discovery/screening/screen_windows.hpp"
+#include "discovery/model/resimulation.hpp"
+#include "discovery/screening/effect_screen.hpp"
+#include "discovery/model/run_signals.hpp"
+#include "discovery/screening/term_library.hpp"
 #include "estimation/health_estimate.hpp"
 
 #include <algorithm>

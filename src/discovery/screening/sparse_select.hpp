@@ -17,8 +17,8 @@
 //     one with the fewest factors is the best (it names the physics: friction ~ F_R^2, not
 //     ~ |theta_u| F_R^2 where the load follows the deflection);
 //   - peak torque |sum b_j x_j| >= kMinEffectPeakNm on the compared samples.
-#include "discovery/effect_screen.hpp"
-#include "discovery/term_library.hpp"
+#include "discovery/screening/effect_screen.hpp"
+#include "discovery/screening/term_library.hpp"
 
 #include <cstdint>
 #include <string>

@@ -13,8 +13,8 @@
 //      (breakaway_across.hpp): an offset at rest sized by the BRK run and named by the DYN run;
 //   5. across load cases (across_loads.hpp): an efficiency change and a friction that follows the
 //      load on one run, told apart by runs at other loads.
-#include "discovery/across_loads.hpp"
-#include "discovery/breakaway_across.hpp"
+#include "discovery/many_run/across_loads.hpp"
+#include "discovery/many_run/breakaway_across.hpp"
 #include "discovery/discovery.hpp"
 
 #include <nlohmann/json.hpp>

@@ -1,4 +1,4 @@
-#include "discovery/term_library.hpp"
+#include "discovery/screening/term_library.hpp"
 
 #include <algorithm>
 #include <cmath>

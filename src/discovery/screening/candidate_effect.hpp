@@ -16,7 +16,7 @@
 // T_F, so to T_R; ripple adds to the motor torque, so it subtracts from T_R; a current gain error
 // scales the measured I, so T_R gains e k_t I_true = a k_t I_measured; a hinge offset shifts the
 // measured H, so T_R loses offset / tau; an inertia error leaves (J_true - J) dw/dt in T_R.
-#include "discovery/run_signals.hpp"
+#include "discovery/model/run_signals.hpp"
 
 #include <string>
 #include <utility>
