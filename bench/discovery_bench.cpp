@@ -14,9 +14,9 @@
 // With plot_dir, the SVG of every unexplained structure is written there (CASE_SEED.svg).
 #include "../tests/support/discovery_cases.hpp"
 #include "core/sim_run.hpp"
-#include "discovery/candidate_effect.hpp"
+#include "discovery/screening/candidate_effect.hpp"
 #include "discovery/discovery.hpp"
-#include "discovery/multi_run.hpp"
+#include "discovery/many_run/multi_run.hpp"
 #include "discovery/residual_plot.hpp"
 
 #include <algorithm>

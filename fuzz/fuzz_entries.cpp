@@ -9,7 +9,7 @@
 #include "core/emadiag_error.hpp"
 #include "core/run_csv.hpp"
 #include "diagnosis/health_limits.hpp"
-#include "discovery/augmented_model.hpp"
+#include "discovery/model/augmented_model.hpp"
 #include "emadiag/can/can_error.hpp"
 #include "emadiag/can/candump_log.hpp"
 #include "emadiag/can/crc8.hpp"

@@ -5,7 +5,7 @@
 // Usage: fuzz_make_seeds OUT_DIR (the corpus folders are created in it).
 #include "core/run_csv.hpp"
 #include "diagnosis/health_limits.hpp"
-#include "discovery/augmented_model.hpp"
+#include "discovery/model/augmented_model.hpp"
 #include "emadiag/can/candump_log.hpp"
 #include "emadiag/can/ema_icd.hpp"
 #include "estimation/dataset.hpp"

@@ -1,8 +1,8 @@
 #include "diagnosis/augmented_model_use.hpp"
 
 #include "core/emadiag_error.hpp"
-#include "discovery/augmented_model.hpp"
-#include "discovery/model_correction.hpp"
+#include "discovery/model/augmented_model.hpp"
+#include "discovery/model/model_correction.hpp"
 #include "emadiag/db/sha256.hpp"
 #include "emadiag/io/bounded_json.hpp"
 #include "emadiag/sim/ema_params.hpp"

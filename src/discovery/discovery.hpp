@@ -2,20 +2,23 @@
 // Closing the loop with measured data (docs/discovery.md): the residual between a run and the
 // datasheet model with the run's estimated health, traced to an effect the model lacks, that
 // effect added and fitted by re-simulation, and the error before and after.
+// discover() runs seven stages on one context (src/discovery/README.md has the diagram):
 //   1. Baseline: datasheet + estimate_physics(run) (FDJ, eta where identifiable, FSJ on BRK runs;
 //      the datasheet value otherwise, said in the health note). Re-simulated, noise none.
-//   2. Screening of the candidate library (candidate_effect.hpp) on the model-consistent residual
-//      with the BIC and an effect-size floor (effect_screen.hpp).
-//   3. The winner's coefficients are fitted with FDJ (and eta_O) by re-simulation
-//      (resimulation.hpp); the fit must confirm it (the same BIC on the re-simulated cost, peak
-//      torque >= kMinEffectPeakNm); screening repeats with it in the base, up to max_effects.
+//   2. Torque rounds: the candidate library (candidate_effect.hpp) and the generated terms screened
+//      on the model-consistent residual with the BIC and an effect-size floor (effect_screen.hpp);
+//      the winner fitted with FDJ (and eta_O) by re-simulation (resimulation.hpp), confirmed by the
+//      fit (the same BIC on the re-simulated cost, peak torque >= kMinEffectPeakNm), its hypotheses
+//      told apart by the trajectory; screening repeats with it in the base, up to max_effects.
+//   3. Efficiency or friction, 4. position sensor, 5. low-speed friction and 6. ripple by the
+//      trajectory, 7. a final refit on the trajectory and the residual structure.
 // Only the Run's samples, constants, case and sequence are read: never true_* / effect_* metadata.
 #include "core/run.hpp"
-#include "discovery/augmented_model.hpp"
-#include "discovery/effect_screen.hpp"
-#include "discovery/resimulation.hpp"
-#include "discovery/sparse_select.hpp"
-#include "discovery/trajectory.hpp"
+#include "discovery/model/augmented_model.hpp"
+#include "discovery/screening/effect_screen.hpp"
+#include "discovery/model/resimulation.hpp"
+#include "discovery/screening/sparse_select.hpp"
+#include "discovery/model/trajectory.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -47,7 +50,7 @@ struct DiscoveryOptions {
 };
 
 /// Two hypotheses are told apart by the trajectory when the worse one's cost is at least this many
-/// times the better one's (and above it by a margin, discovery.cpp); cost 1 = the noise floor.
+/// times the better one's (and above it by a margin, stages/hypotheses.cpp); cost 1 = the noise floor.
 inline constexpr double kHypothesisRatio = 1.25;
 /// ... and only when the worse cost is also at least this far above the better one.
 inline constexpr double kHypothesisMinCostGap = 0.1;
@@ -65,7 +68,7 @@ struct Hypothesis {
     TrajectoryError error;
     int simulations = 0;
     double tell_apart_ratio = kHypothesisRatio;  ///< cost ratio by which the trajectory tells it from the one found
-    bool refit_on_trajectory = false;  ///< cost after a refit on the trajectory (close hypotheses, discovery.cpp)
+    bool refit_on_trajectory = false;  ///< cost after a refit on the trajectory (close hypotheses, stages/hypotheses.cpp)
 };
 
 /// One round: the screening, and the effect it added (if any) with the error after it.

@@ -2,11 +2,11 @@
 // re-simulating with it reproduces the error the discovery reported.
 #include "core/emadiag_error.hpp"
 #include "core/sim_run.hpp"
-#include "discovery/augmented_model.hpp"
-#include "discovery/candidate_effect.hpp"
+#include "discovery/model/augmented_model.hpp"
+#include "discovery/screening/candidate_effect.hpp"
 #include "discovery/discovery.hpp"
-#include "discovery/resimulation.hpp"
-#include "discovery/run_signals.hpp"
+#include "discovery/model/resimulation.hpp"
+#include "discovery/model/run_signals.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

@@ -6,11 +6,11 @@
 #include "core/emadiag_error.hpp"
 #include "core/run_csv.hpp"
 #include "core/sim_run.hpp"
-#include "discovery/candidate_effect.hpp"
+#include "discovery/screening/candidate_effect.hpp"
 #include "discovery/discovery.hpp"
-#include "discovery/effect_screen.hpp"
-#include "discovery/resimulation.hpp"
-#include "discovery/run_signals.hpp"
+#include "discovery/screening/effect_screen.hpp"
+#include "discovery/model/resimulation.hpp"
+#include "discovery/model/run_signals.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

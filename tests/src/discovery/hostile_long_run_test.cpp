@@ -4,7 +4,7 @@
 // 2-million-row figures are in docs/discovery.md.
 #include "core/sim_run.hpp"
 #include "discovery/discovery.hpp"
-#include "discovery/multi_run.hpp"
+#include "discovery/many_run/multi_run.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

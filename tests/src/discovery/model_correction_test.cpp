@@ -3,8 +3,8 @@
 // to the truth; sensor terms are inverted exactly; what cannot be removed is a clear error.
 #include "core/emadiag_error.hpp"
 #include "core/sim_run.hpp"
-#include "discovery/augmented_model.hpp"
-#include "discovery/model_correction.hpp"
+#include "discovery/model/augmented_model.hpp"
+#include "discovery/model/model_correction.hpp"
 #include "estimation/health_estimate.hpp"
 #include "estimation/physics_estimator.hpp"
 

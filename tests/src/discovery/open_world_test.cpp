@@ -7,12 +7,12 @@
 // to fix them); seed 113 is no longer a fresh seed.
 #include "core/emadiag_error.hpp"
 #include "core/sim_run.hpp"
-#include "discovery/augmented_model.hpp"
+#include "discovery/model/augmented_model.hpp"
 #include "discovery/discovery.hpp"
-#include "discovery/multi_run.hpp"
+#include "discovery/many_run/multi_run.hpp"
 #include "discovery/physics_names.hpp"
 #include "discovery/residual_plot.hpp"
-#include "discovery/sparse_select.hpp"
+#include "discovery/screening/sparse_select.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

@@ -1,7 +1,7 @@
 // Issue 22 part 3: the ranges discovery fits an effect in are the simulator's (sim::Effects::range,
 // the one definition), narrowed only where resimulation.cpp states why; they had drifted apart
 // (stribeck_speed, spall_width, true_inertia) when discovery kept a copy of its own.
-#include "discovery/resimulation.hpp"
+#include "discovery/model/resimulation.hpp"
 #include "emadiag/sim/ema_params.hpp"
 
 #include <gtest/gtest.h>

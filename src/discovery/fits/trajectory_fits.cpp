@@ -1,0 +1,106 @@
+// A fit taken into the model (record_health, adopt_trajectory_fit), and the model's own parameters
+// refitted on the trajectory (refit_on_trajectory).
+#include "discovery/fits/fits.hpp"
+
+#include "estimation/health_estimate.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace emadiag::discovery::pipeline {
+
+void record_health(std::vector<HealthValue>& health, const FitResult& fit) {
+    for (const auto& f : fit.values) {
+        if (f.name == "fdj_nm") {
+            auto* h = find_health(health, kParamFdj);
+            h->value = f.value;
+            h->std_error = f.std_error;
+            h->source = "refit";
+        } else if (f.name == "eta_o") {
+            auto* h = find_health(health, kParamEtaO);
+            h->value = f.value;
+            h->std_error = f.std_error;
+            h->source = "refit";
+            constexpr double kSlopeStep = 1e-6;
+            const double slope = (sim::eta_a_from_eta_o(fit.params.eta_o + kSlopeStep, fit.params.tau) -
+                                  sim::eta_a_from_eta_o(fit.params.eta_o - kSlopeStep, fit.params.tau)) /
+                                 (2 * kSlopeStep);
+            auto* eta_a_value = find_health(health, kParamEtaA);
+            eta_a_value->value = fit.params.eta_a;
+            eta_a_value->std_error = std::abs(slope) * f.std_error;
+        }
+    }
+    find_health(health, kParamFsj)->value = fit.params.fsj_nm;
+}
+
+void record_term_errors(sim::EmaParams& q, const FitResult& fit) {
+    for (const auto& f : fit.values) {
+        if (is_term_parameter(f.name)) q.terms[std::stoul(f.name.substr(5))].std_error = f.std_error;
+    }
+}
+
+void adopt_trajectory_fit(Context& ctx, const FitResult& fit) {
+    sim::EmaParams& p = ctx.params;
+    DiscoveryReport& rep = ctx.rep;
+    p = fit.params;
+    record_health(ctx.health(), fit);
+    record_term_errors(p, fit);
+    for (const auto& f : fit.values) {
+        if (f.name == "fdj_nm" || f.name == "eta_o" || is_term_parameter(f.name)) continue;
+        const std::string field = effect_field(f.name);
+        bool known = false;
+        for (auto& t : rep.model.terms) {
+            if (t.effect == field) {
+                t.value = f.value;
+                t.std_error = f.std_error;
+                known = true;
+            }
+        }
+        if (!known) rep.model.terms.push_back({field, f.value, f.std_error});
+    }
+    for (auto& f : rep.sensor_findings) {
+        for (const auto& t : p.terms) {
+            if (t.target == f.term.target && t.basis_text() == f.term.basis_text()) f.term = t;
+        }
+    }
+    ctx.model_sim = fit.signals;
+    ctx.traj_now = trajectory_error(ctx.signals, ctx.model_sim, ctx.floor);
+}
+
+std::vector<std::string> own_parameter_names(const Context& ctx, const sim::EmaParams& q, std::optional<EffectKind> skip) {
+    std::vector<std::string> names = ctx.health_names;
+    for (const auto& a : ctx.accepted) {
+        if (skip && a.kind == *skip) continue;
+        for (const auto& n : fitted_sim_effects(a.kind)) names.push_back(n);
+    }
+    for (std::size_t i = 0; i < q.terms.size(); ++i) names.push_back(term_parameter(i));
+    return names;
+}
+
+TrajectoryRefit refit_on_trajectory(const Context& ctx, const sim::EmaParams& from) {
+    const RunSignals& s = ctx.signals;
+    const NoiseFloor& floor = ctx.floor;
+    const double fsj_base_nm = ctx.fsj_base_nm;
+    const std::vector<HealthValue>& health = ctx.health();
+    const std::vector<std::string> names = own_parameter_names(ctx, from);
+    sim::EmaParams start = from;
+    start.fsj_nm = std::max(fsj_base_nm, start.fdj_nm);
+    TrajectoryRefit r;
+    r.fit = fit_by_resimulation(ctx.run, s, start, names, ctx.mask, fsj_base_nm, kFitWindowSamples, nullptr, kFinalRefitIterations, &floor);
+    r.cost = trajectory_error(s, r.fit.signals, floor).cost;
+    for (auto& v : r.fit.values) {
+        double before = 0;
+        if (v.name == "fdj_nm") before = find_health(health, kParamFdj)->std_error;
+        else if (v.name == "eta_o") before = find_health(health, kParamEtaO)->std_error;
+        else if (is_term_parameter(v.name)) before = from.terms[std::stoul(v.name.substr(5))].std_error;
+        else {
+            for (const auto& t : ctx.rep.model.terms) {
+                if (t.effect == effect_field(v.name)) before = t.std_error;
+            }
+        }
+        v.std_error = std::max(v.std_error, before);
+    }
+    return r;
+}
+
+}  // namespace emadiag::discovery::pipeline
