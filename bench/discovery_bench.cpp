@@ -14,6 +14,7 @@
 // With plot_dir, the SVG of every unexplained structure is written there (CASE_SEED.svg).
 #include "../tests/support/discovery_cases.hpp"
 #include "core/sim_run.hpp"
+#include "emadiag/sim/physics.hpp"
 #include "discovery/screening/candidate_effect.hpp"
 #include "discovery/discovery.hpp"
 #include "discovery/many_run/multi_run.hpp"
@@ -38,7 +39,7 @@ namespace {
 using emadiag::discovery::DiscoveryReport;
 namespace tc = emadiag::testcases;
 
-constexpr double kTrueFdjNm = 0.08;
+constexpr double kTrueFdjNm = emadiag::sim::ema_ref_1::kFdjNm;  // the datasheet
 /// Issue 10's goal for the time of discover() on one run.
 constexpr double kGoalCpuS = 2.0;
 /// Issue 10's goal where a term is added: the re-simulated current error falls to this share of before

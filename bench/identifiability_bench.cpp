@@ -14,6 +14,7 @@
 // (estimate_physics) on the noisy runs the calibration bench builds, against that bound.
 // Part 2 (noise none, case A): the eta confound. FSJ, FDJ up by delta and (1 - eta_A)|F_R| down by
 // delta leaves every breakaway and slip threshold unchanged up to the O(1/tau) mismatch of eq. (4).
+#include "emadiag/sim/physics.hpp"
 #include "emadiag/sim/simulator.hpp"
 #include "estimation/dataset.hpp"
 #include "estimation/health_estimate.hpp"
@@ -41,7 +42,7 @@ constexpr int kDefaultCount = 200;
 constexpr std::uint64_t kDefaultSeed = 7;
 constexpr double kTwinRel = 0.03;             // part 1: FSJ (1 +/- 3 %)
 constexpr double kGapBin = 0.005;             // N m
-constexpr double kCaseAHingeNm = 5.0;         // ema-reference.md section 4
+using sim::kCaseAHingeNm;                     // ema-reference.md section 4
 // Part 2: a twin at FSJ (1 + r) shares no 1 % band with FSJ when r > 0.02 / 0.99 = 2.0202 %;
 // at FSJ (1 - r) when r > 0.02 / 1.01 = 1.9802 %. 2.03 % clears both (2.02 % overlaps by 2e-6 FSJ).
 constexpr double kConfoundRel = 0.0203;
@@ -717,7 +718,7 @@ void part2(const std::vector<HealthLabels>& labels, unsigned threads) {
     for (double f : {0.096, 0.098, 0.100, 0.102, 0.104}) {
         for (double e : {eta.lo, eta.hi}) {
             HealthLabels h;
-            h.fdj_nm = 0.08;
+            h.fdj_nm = sim::ema_ref_1::kFdjNm;
             h.fsj_nm = f;
             h.eta_a = e;
             h.eta_o = sim::eta_o_from_eta_a(e, tau);

@@ -10,6 +10,7 @@
 //     LIST: comma-separated targets (scalar, sse4, avx2, avx512) or "all" (default: all supported).
 //     The paper dataset runs on the scalar path only when LIST names scalar (about 10 s per core).
 //     EMADIAG_SIMD=avx2 sim_bench measures only that target (as any program with that variable would use).
+#include "emadiag/sim/physics.hpp"
 #include "emadiag/sim/simulator.hpp"
 
 #include <benchmark/benchmark.h>
@@ -27,6 +28,7 @@
 
 namespace {
 
+namespace sim = emadiag::sim;
 using emadiag::sim::SimConfig;
 
 constexpr double kStepsPerRun = 0.5 / 1e-6;
@@ -37,9 +39,11 @@ std::vector<SimConfig> configs(std::size_t n, std::uint64_t seed) {
     auto u = [&] { return static_cast<double>(rng() >> 11) * (1.0 / 9007199254740992.0); };
     std::vector<SimConfig> v(n);
     for (auto& c : v) {
-        c.params.fdj_nm = 0.064 + 0.032 * u();
-        c.params.fsj_nm = 0.096 + 0.048 * u();
-        c.params.eta_a = 0.659031 + (0.988546 - 0.659031) * u();
+        // The section-8 ranges (physics.hpp). 0.032 is kPriorFdjMaxNm - kPriorFdjMinNm exactly; that
+        // difference for FSJ rounds below 0.048, so the width of FSJ stays written.
+        c.params.fdj_nm = sim::kPriorFdjMinNm + (sim::kPriorFdjMaxNm - sim::kPriorFdjMinNm) * u();
+        c.params.fsj_nm = sim::kPriorFsjMinNm + 0.048 * u();
+        c.params.eta_a = sim::kPriorEtaAMin + (sim::kPriorEtaAMax - sim::kPriorEtaAMin) * u();
         c.params.eta_o = emadiag::sim::eta_o_from_eta_a(c.params.eta_a, c.params.tau);
     }
     return v;

@@ -564,8 +564,8 @@ inline void run_group(const SimConfig* const* configs, SimResult* const* out) {
             const EmaParams& p = configs[g * W + l]->params;
             fdj[l] = p.fdj_nm;
             fsj[l] = p.fsj_nm;
-            c_opp[l] = 1.0 / p.eta_o - 1.0;  // eq. (3), opposing
-            c_aid[l] = 1.0 - p.eta_a;        // eq. (3), aiding
+            c_opp[l] = ::emadiag::sim::load_coefficient_opposing(p.eta_o);  // eq. (3), opposing
+            c_aid[l] = ::emadiag::sim::load_coefficient_aiding(p.eta_a);    // eq. (3), aiding
             // As make_shared computes them for the lane's own parameters.
             j[l] = p.plant_inertia_kgm2();
             dt_inv_j[l] = p.dt_s * (1.0 / j[l]);

@@ -3,6 +3,7 @@
 // lane shares, the command), and the scalar path itself: step_kernel-inl.h instantiated over plain
 // doubles (W = 1). batch_kernels.cpp instantiates the same step over Highway vectors, once per
 // instruction set (SSE4, AVX2, AVX-512, ...), and simulator.cpp picks one at run time.
+#include "emadiag/sim/physics.hpp"
 #include "emadiag/sim/simulator.hpp"
 #include "term_hook.hpp"
 
@@ -31,8 +32,9 @@ inline constexpr double kChAlphaPerRad = -0.15;
 inline constexpr double kChDeltaPerRad = -0.25;
 inline constexpr double kTailArmM = 20.0;
 inline constexpr double kAirspeedMS = 76.2;
-inline constexpr double kCaseAHingeNm = 5.0;
-inline constexpr double kAExtHingeRateNmPerS = 1990.0;
+// Cases A and A-ext: kCaseAHingeNm and kAExtHingeRateNmPerS of physics.hpp.
+using sim::kAExtHingeRateNmPerS;
+using sim::kCaseAHingeNm;
 // BRK phases (the sequence itself is defined in simulator.hpp, section 5).
 inline constexpr double kPhaseHold0 = 0, kPhaseRampUp = 1, kPhaseHold1 = 2, kPhaseRampDown = 3, kPhaseHold2 = 4;
 

@@ -1,12 +1,10 @@
-// GCC 12 reports false -Wmaybe-uninitialized inside Eigen's AVX-512 GEMM kernels (gemm_pack_lhs).
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#pragma GCC diagnostic ignored "-Wuninitialized"
 #include "estimation/dataset.hpp"
 
 #include "core/emadiag_error.hpp"
 #include "estimation/health_estimate.hpp"
 #include "emadiag/io/bounded_json.hpp"
 #include "emadiag/io/output_path.hpp"
+#include "emadiag/sim/physics.hpp"
 #include "emadiag/sim/sim_error.hpp"
 
 #include <nlohmann/json.hpp>
@@ -31,11 +29,12 @@ constexpr int kColumns = 6;
 constexpr int kLabelCount = 4;
 constexpr const char* kColumnNames[kColumns] = {"t_s", "current_A", "speed_rad_s", "theta_m_rad", "hinge_moment_Nm", "command_deg"};
 constexpr const char* kLabelNames[kLabelCount] = {kParamFdj, kParamFsj, kParamEtaO, kParamEtaA};
-constexpr double kNominalFdjNm = 0.08;
-constexpr double kNominalFsjNm = 0.12;
-constexpr double kNominalEtaA = 0.823788;
-constexpr double kHealthSpread = 0.20;  // section 8: +/-20 %
-constexpr double kDatasheetTau = 800.0;
+// The datasheet's nominal values and the section-8 spread (+/-20 %), from emadiag/sim/physics.hpp.
+constexpr double kNominalFdjNm = sim::ema_ref_1::kFdjNm;
+constexpr double kNominalFsjNm = sim::ema_ref_1::kFsjNm;
+constexpr double kNominalEtaA = sim::ema_ref_1::kEtaA;
+using sim::kHealthSpread;
+constexpr double kDatasheetTau = sim::ema_ref_1::kTau;
 constexpr int kGroupsPerThread = 2;  // batch groups per thread and chunk
 
 

@@ -1,11 +1,9 @@
-// GCC 12 reports false -Wmaybe-uninitialized inside Eigen's AVX-512 GEMM kernels (gemm_pack_lhs).
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#pragma GCC diagnostic ignored "-Wuninitialized"
 #include "estimation/network_model.hpp"
 
 #include "core/emadiag_error.hpp"
 #include "estimation/number_text.hpp"
 #include "estimation/dataset.hpp"
+#include "estimation/physics_friction_law.hpp"
 #include "emadiag/io/bounded_json.hpp"
 #include "emadiag/io/output_path.hpp"
 #include "emadiag/sim/ema_params.hpp"
@@ -188,9 +186,7 @@ HealthEstimate NetworkModel::estimate(const Run& run) const {
             const double eta_o = r.denormalise(u[eo]);
             const double tau = run.constants.tau;
             p.value = sim::eta_a_from_eta_o(eta_o, tau);  // eq. (4)
-            const double slope = (sim::eta_a_from_eta_o(eta_o + kEq4DerivativeStep, tau) -
-                                  sim::eta_a_from_eta_o(eta_o - kEq4DerivativeStep, tau)) /
-                                 (2 * kEq4DerivativeStep);
+            const double slope = eta_a_derivative_central(eta_o, tau, kEq4DerivativeStep);
             p.std_error = std::abs(slope) * std_error_normalised[eo] * (r.hi - r.lo);
             p.method = "eq4";
             p.note = "from the network's eta_O by eq. (4)";

@@ -1,6 +1,3 @@
-// GCC 12 reports false -Wmaybe-uninitialized inside Eigen's AVX-512 GEMM kernels (gemm_pack_lhs).
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#pragma GCC diagnostic ignored "-Wuninitialized"
 #include "estimation/nn_trainer.hpp"
 
 #include "core/emadiag_error.hpp"

@@ -1,6 +1,3 @@
-// GCC 12 reports false -Wmaybe-uninitialized inside Eigen's AVX-512 GEMM kernels (gemm_pack_lhs).
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#pragma GCC diagnostic ignored "-Wuninitialized"
 #include "estimation/paper_tables.hpp"
 
 #include "core/emadiag_error.hpp"
@@ -8,6 +5,7 @@
 #include "estimation/health_estimate.hpp"
 #include "estimation/nn_trainer.hpp"
 #include "estimation/physics_estimator.hpp"
+#include "emadiag/sim/physics.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -22,7 +20,7 @@
 namespace emadiag {
 namespace {
 
-constexpr double kCaseAHingeNm = 5.0;  // ema-reference.md section 4, case A
+using sim::kCaseAHingeNm;  // ema-reference.md section 4, case A
 constexpr int kFloorSamples = 20000;
 constexpr int kFloorGrid = 2001;
 constexpr int kTenPredictions = 10;
@@ -304,15 +302,16 @@ ConfoundFloor case_a_fdj_floor(double hinge_moment_nm, double tau, int samples, 
     for (int g = 0; g < kFloorGrid; ++g) {
         const double ea = eta_a.denormalise(static_cast<double>(g) / (kFloorGrid - 1));
         const double eo = sim::eta_o_from_eta_a(ea, tau);
-        c[static_cast<std::size_t>(g)] = (1.0 / eo - 1.0) * f_r;  // eq. (5), opposing
-        floor.c_difference_max = std::max(floor.c_difference_max, std::abs((1.0 / eo - 1.0) - (1.0 - ea)) * f_r);
+        c[static_cast<std::size_t>(g)] = sim::load_coefficient_opposing(eo) * f_r;  // eq. (5), opposing
+        floor.c_difference_max =
+            std::max(floor.c_difference_max, std::abs(sim::load_coefficient_opposing(eo) - sim::load_coefficient_aiding(ea)) * f_r);
     }
     std::mt19937_64 rng(seed);
     double sum = 0;
     for (int k = 0; k < samples; ++k) {
         const double f = fdj.denormalise(uniform01(rng()));
         const double ea = eta_a.denormalise(uniform01(rng()));
-        const double s = f + (1.0 / sim::eta_o_from_eta_a(ea, tau) - 1.0) * f_r;
+        const double s = f + sim::load_coefficient_opposing(sim::eta_o_from_eta_a(ea, tau)) * f_r;
         // Posterior over the eta_A grid is uniform where s - c(eta) is an admissible FDJ.
         double m = 0;
         int n = 0;

@@ -18,7 +18,7 @@
 namespace emadiag {
 namespace {
 constexpr std::uint64_t kNoiseSeedStride = 1000003;
-constexpr double kCaseAHingeNm = 5.0;  // ema-reference.md section 4
+using sim::kCaseAHingeNm;  // ema-reference.md section 4
 constexpr double kOnePercent = 0.01, kThreePercent = 0.03;
 }  // namespace
 
@@ -127,7 +127,7 @@ double case_a_fdj_floor_normalised(double tau, int grid) {
         const double f = fdj.lo + (i + 0.5) / n * (fdj.hi - fdj.lo);
         for (int k = 0; k < n; ++k) {
             const double eta_a = kPriorEtaAMin + (k + 0.5) / n * (kPriorEtaAMax - kPriorEtaAMin);
-            pts.emplace_back(f + (1.0 - eta_a) * x, f);
+            pts.emplace_back(f + sim::load_coefficient_aiding(eta_a) * x, f);
         }
     }
     std::sort(pts.begin(), pts.end());

@@ -14,10 +14,8 @@ constexpr double kNegligibleFraction = 1e-6;  // one part is negligible: use the
 constexpr int kBisectionSteps = 60;
 }  // namespace
 
-double load_coefficient_opposing(double eta_o) { return 1.0 / eta_o - 1.0; }  // eq. (5), opposing
-
 double load_coefficient_aiding(double eta_o, double tau) {
-    return 1.0 - sim::eta_a_from_eta_o(eta_o, tau);  // eq. (5), aiding, with eq. (4)
+    return sim::load_coefficient_aiding(sim::eta_a_from_eta_o(eta_o, tau));  // eq. (5), aiding, with eq. (4)
 }
 
 double eta_a_derivative(double eta_o, double tau) {
@@ -26,6 +24,10 @@ double eta_a_derivative(double eta_o, double tau) {
     const double num = 2 * t2 * eta_o - t2 + tau;
     const double den = t2 * eta_o + tau - eta_o + 1;
     return (2 * t2 * den - num * (t2 - 1)) / (den * den);
+}
+
+double eta_a_derivative_central(double eta_o, double tau, double h) {
+    return (sim::eta_a_from_eta_o(eta_o + h, tau) - sim::eta_a_from_eta_o(eta_o - h, tau)) / (2 * h);
 }
 
 LoadCoefficientPrior load_coefficient_prior(double tau) {

@@ -4,22 +4,30 @@
 //                                                      c = 1 - eta_A   (aiding)
 //   breakaway in direction d: d (k_t I - F_R) = FSJ + c(d) |F_R|
 // and eta_A from eta_O by eq. (4). Also the prior of section 8 (the +/-20 % ranges) used when the
-// data cannot tell eta from FDJ.
+// data cannot tell eta from FDJ. The constants and c are defined once in emadiag/sim/physics.hpp.
+#include "emadiag/sim/physics.hpp"
+
 namespace emadiag {
 
 /// Section 8: eta_A is uniform in [0.659031, 0.988546]; eta_O follows from eq. (4).
-inline constexpr double kPriorEtaAMin = 0.659031;
-inline constexpr double kPriorEtaAMax = 0.988546;
+using sim::kPriorEtaAMax;
+using sim::kPriorEtaAMin;
 /// Section 8 ranges of FDJ and FSJ (N m), used only for normalised errors and sanity limits.
-inline constexpr double kPriorFdjMinNm = 0.064, kPriorFdjMaxNm = 0.096;
-inline constexpr double kPriorFsjMinNm = 0.096, kPriorFsjMaxNm = 0.144;
+using sim::kPriorFdjMaxNm;
+using sim::kPriorFdjMinNm;
+using sim::kPriorFsjMaxNm;
+using sim::kPriorFsjMinNm;
 
 /// Load coefficient c of eq. (5) for an opposing load: 1/eta_O - 1.
-[[nodiscard]] double load_coefficient_opposing(double eta_o);
+using sim::load_coefficient_opposing;
 /// Load coefficient for an aiding load: 1 - eta_A, eta_A from eq. (4) with tau.
 [[nodiscard]] double load_coefficient_aiding(double eta_o, double tau);
-/// d eta_A / d eta_O of eq. (4) (analytic).
+/// d eta_A / d eta_O of eq. (4) (analytic). The one home of this derivative, with the next.
 [[nodiscard]] double eta_a_derivative(double eta_o, double tau);
+/// d eta_A / d eta_O of eq. (4) by the central difference of step h:
+/// (eta_A(eta_O + h) - eta_A(eta_O - h)) / (2 h). Kept beside the analytic form for the callers
+/// whose figures were set with it (the two differ in the last bits).
+[[nodiscard]] double eta_a_derivative_central(double eta_o, double tau, double h);
 
 /// What the section-8 prior says about c when eta is not identifiable: the mean of c over the
 /// eta_A range, and the half-width of its (nearly uniform) spread.

@@ -138,6 +138,72 @@ std::vector<SlipWindow> slip_windows(const Run& run) {
     return out;
 }
 
+namespace {
+
+/// The covariance of (FDJ, eta_O) at the converged fit (fit_friction_wrls): the sandwich with the
+/// Huber weights wt, residuals r and eta slopes g, and the reconstruction error's share (step 6b).
+/// Also sets res.hac_fallback, res.recon_weighted_windows, res.fdj_recon_se_nm and res.eta_o_recon_se.
+Mat2 sandwich_covariance(const std::vector<SlipWindow>& windows, int p, const std::vector<double>& r,
+                         const std::vector<double>& wt, const std::vector<double>& g, double scale, WrlsResult& res) {
+    const std::size_t n = windows.size();
+    // Sandwich covariance, heteroscedasticity and lag-1 autocorrelation consistent within a
+    // segment: consecutive windows share a boundary speed, so their residuals are
+    // e_i = u_i + v_{i+1} - v_i, and on noise-free runs the boundary errors telescope away.
+    Mat2 bread, meat;
+    for (std::size_t i = 0; i < n; ++i) bread.add(wt[i], 1.0, g[i]);
+    auto add_meat = [&](bool lag1) {
+        meat = Mat2{};
+        for (std::size_t i = 0; i < n; ++i) {
+            const double si0 = wt[i] * r[i], si1 = wt[i] * r[i] * g[i];
+            meat.a00 += si0 * si0; meat.a01 += si0 * si1; meat.a11 += si1 * si1;
+            if (lag1 && i + 1 < n && windows[i + 1].segment == windows[i].segment) {
+                const double sj0 = wt[i + 1] * r[i + 1], sj1 = wt[i + 1] * r[i + 1] * g[i + 1];
+                meat.a00 += 2 * si0 * sj0;
+                meat.a01 += si0 * sj1 + sj0 * si1;
+                meat.a11 += 2 * si1 * sj1;
+            }
+        }
+    };
+    const double small_sample = static_cast<double>(n) / static_cast<double>(n - static_cast<std::size_t>(p));
+    auto covariance = [&] {
+        Mat2 c;
+        if (p == 1) {
+            c.a00 = meat.a00 / (bread.a00 * bread.a00) * small_sample;
+        } else {
+            c = bread.inverse().sandwich(meat);
+            c.a00 *= small_sample; c.a01 *= small_sample; c.a11 *= small_sample;
+        }
+        return c;
+    };
+    add_meat(false);
+    const Mat2 cov_lag0 = covariance();
+    add_meat(true);
+    Mat2 cov = covariance();
+    // The lag-1 terms are a noisy estimate: they can make a variance implausibly small (or
+    // negative on short runs). Keep each variance at least kMinHacFraction of its lag-0 value.
+    res.hac_fallback = cov.a00 < kMinHacFraction * cov_lag0.a00 || (p == 2 && cov.a11 < kMinHacFraction * cov_lag0.a11);
+    cov.a00 = std::max(cov.a00, kMinHacFraction * cov_lag0.a00);
+    cov.a11 = std::max(cov.a11, kMinHacFraction * cov_lag0.a11);
+    // Step 6b: D = sum_i h_i recon_error_i, the move of the estimate under the fourth-order
+    // reconstruction at the same weights; |D| / kReconErrorZ in quadrature.
+    {
+        const Mat2 inv = p == 2 ? bread.inverse() : Mat2{1.0 / bread.a00, 0, 0};
+        double d0 = 0, d1 = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            d0 += (inv.a00 + inv.a01 * g[i]) * wt[i] * windows[i].recon_error_nm;
+            d1 += (inv.a01 + inv.a11 * g[i]) * wt[i] * windows[i].recon_error_nm;
+            if (std::abs(windows[i].recon_error_nm) > scale) ++res.recon_weighted_windows;
+        }
+        res.fdj_recon_se_nm = std::abs(d0) / kReconErrorZ;
+        res.eta_o_recon_se = p == 2 ? std::abs(d1) / kReconErrorZ : 0.0;
+        cov.a00 += res.fdj_recon_se_nm * res.fdj_recon_se_nm;
+        cov.a11 += res.eta_o_recon_se * res.eta_o_recon_se;
+    }
+    return cov;
+}
+
+}  // namespace
+
 WrlsResult fit_friction_wrls(const std::vector<SlipWindow>& windows, double tau) {
     WrlsResult res;
     res.windows = windows.size();
@@ -234,59 +300,7 @@ WrlsResult fit_friction_wrls(const std::vector<SlipWindow>& windows, double tau)
     }
     update_residuals();
     res.residual_scale_nm = scale;
-    // Sandwich covariance, heteroscedasticity and lag-1 autocorrelation consistent within a
-    // segment: consecutive windows share a boundary speed, so their residuals are
-    // e_i = u_i + v_{i+1} - v_i, and on noise-free runs the boundary errors telescope away.
-    Mat2 bread, meat;
-    for (std::size_t i = 0; i < n; ++i) bread.add(wt[i], 1.0, g[i]);
-    auto add_meat = [&](bool lag1) {
-        meat = Mat2{};
-        for (std::size_t i = 0; i < n; ++i) {
-            const double si0 = wt[i] * r[i], si1 = wt[i] * r[i] * g[i];
-            meat.a00 += si0 * si0; meat.a01 += si0 * si1; meat.a11 += si1 * si1;
-            if (lag1 && i + 1 < n && windows[i + 1].segment == windows[i].segment) {
-                const double sj0 = wt[i + 1] * r[i + 1], sj1 = wt[i + 1] * r[i + 1] * g[i + 1];
-                meat.a00 += 2 * si0 * sj0;
-                meat.a01 += si0 * sj1 + sj0 * si1;
-                meat.a11 += 2 * si1 * sj1;
-            }
-        }
-    };
-    const double small_sample = static_cast<double>(n) / static_cast<double>(n - static_cast<std::size_t>(p));
-    auto covariance = [&] {
-        Mat2 c;
-        if (p == 1) {
-            c.a00 = meat.a00 / (bread.a00 * bread.a00) * small_sample;
-        } else {
-            c = bread.inverse().sandwich(meat);
-            c.a00 *= small_sample; c.a01 *= small_sample; c.a11 *= small_sample;
-        }
-        return c;
-    };
-    add_meat(false);
-    const Mat2 cov_lag0 = covariance();
-    add_meat(true);
-    Mat2 cov = covariance();
-    // The lag-1 terms are a noisy estimate: they can make a variance implausibly small (or
-    // negative on short runs). Keep each variance at least kMinHacFraction of its lag-0 value.
-    res.hac_fallback = cov.a00 < kMinHacFraction * cov_lag0.a00 || (p == 2 && cov.a11 < kMinHacFraction * cov_lag0.a11);
-    cov.a00 = std::max(cov.a00, kMinHacFraction * cov_lag0.a00);
-    cov.a11 = std::max(cov.a11, kMinHacFraction * cov_lag0.a11);
-    // Step 6b: D = sum_i h_i recon_error_i, the move of the estimate under the fourth-order
-    // reconstruction at the same weights; |D| / kReconErrorZ in quadrature.
-    {
-        const Mat2 inv = p == 2 ? bread.inverse() : Mat2{1.0 / bread.a00, 0, 0};
-        double d0 = 0, d1 = 0;
-        for (std::size_t i = 0; i < n; ++i) {
-            d0 += (inv.a00 + inv.a01 * g[i]) * wt[i] * windows[i].recon_error_nm;
-            d1 += (inv.a01 + inv.a11 * g[i]) * wt[i] * windows[i].recon_error_nm;
-            if (std::abs(windows[i].recon_error_nm) > scale) ++res.recon_weighted_windows;
-        }
-        res.fdj_recon_se_nm = std::abs(d0) / kReconErrorZ;
-        res.eta_o_recon_se = p == 2 ? std::abs(d1) / kReconErrorZ : 0.0;
-        cov.a00 += res.fdj_recon_se_nm * res.fdj_recon_se_nm;
-        cov.a11 += res.eta_o_recon_se * res.eta_o_recon_se;
-    }
+    Mat2 cov = sandwich_covariance(windows, p, r, wt, g, scale, res);
     res.fdj_se_nm = std::sqrt(std::max(0.0, cov.a00));
     const double eta_var = cov.a11;
     res.fdj_nm = fdj;

@@ -1,6 +1,4 @@
-// GCC 12 reports false -Wmaybe-uninitialized inside Eigen's AVX-512 GEMM kernels (gemm_pack_lhs).
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#pragma GCC diagnostic ignored "-Wuninitialized"
+#include "estimation/eigen_dense.hpp"  // first: Eigen with its AVX-512 false positive scoped (see there)
 #include "estimation/scg.hpp"
 
 #include "core/emadiag_error.hpp"

@@ -2,6 +2,7 @@
 
 #include "core/residual_torque.hpp"
 #include "emadiag/sim/ema_params.hpp"
+#include "estimation/physics_friction_law.hpp"
 #include "estimation/run_checks.hpp"
 
 #include <cmath>
@@ -58,7 +59,7 @@ double friction_law_nm(const RunSignals& s, std::size_t k, double fdj_nm, double
     const double fr = s.load_torque_nm[k];
     const int d = w >= 0 ? 1 : -1;
     const bool opposing = fr * d > 0;
-    const double c = opposing ? 1.0 / eta_o - 1.0 : 1.0 - sim::eta_a_from_eta_o(eta_o, s.tau);  // eq. (3), (4)
+    const double c = opposing ? load_coefficient_opposing(eta_o) : load_coefficient_aiding(eta_o, s.tau);  // eq. (3), (4)
     return d * (fdj_nm + c * std::abs(fr));  // eq. (5)
 }
 
@@ -72,7 +73,7 @@ double friction_law_eta_slope_nm(const RunSignals& s, std::size_t k, double eta_
         dc = -1.0 / (eta_o * eta_o);
     } else {
         const double h = kEta4StepRel * eta_o;
-        dc = -(sim::eta_a_from_eta_o(eta_o + h, s.tau) - sim::eta_a_from_eta_o(eta_o - h, s.tau)) / (2 * h);
+        dc = -eta_a_derivative_central(eta_o, s.tau, h);
     }
     return d * dc * std::abs(fr);
 }

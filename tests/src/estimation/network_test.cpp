@@ -1,6 +1,3 @@
-// GCC 12 reports false -Wmaybe-uninitialized inside Eigen's AVX-512 kernels.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#pragma GCC diagnostic ignored "-Wuninitialized"
 // The paper's network: satlins/tansig, resampling, features, JSON round trip, and the shipped
 // models (models/*.json) loading and predicting simulated runs.
 #include "estimation/network.hpp"

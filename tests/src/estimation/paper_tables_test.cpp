@@ -1,6 +1,3 @@
-// GCC 12 reports false -Wmaybe-uninitialized inside Eigen's AVX-512 kernels.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#pragma GCC diagnostic ignored "-Wuninitialized"
 // paper-tables: the eta-confound floor and a quick run of every table.
 #include "estimation/paper_tables.hpp"
 

@@ -1,8 +1,6 @@
-// GCC 12 reports false -Wmaybe-uninitialized inside Eigen's AVX-512 kernels.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#pragma GCC diagnostic ignored "-Wuninitialized"
 // SCG (Moller 1993 / MATLAB trainscg) on the paper's network: gradient against finite differences,
 // convergence on small synthetic problems, validation stopping.
+#include "estimation/eigen_dense.hpp"  // first: Eigen with its AVX-512 false positive scoped (see there)
 #include "estimation/network.hpp"
 #include "estimation/scg.hpp"
 

@@ -1,6 +1,7 @@
 #pragma once
 // Parameters of the reference actuator EMA-REF-1 (ema-reference.md section 1) and the
 // effects beyond the datasheet (issue 2 part 5). Every field is validated; JSON in and out.
+#include "emadiag/sim/physics.hpp"
 #include "emadiag/sim/terms.hpp"
 
 #include <nlohmann/json.hpp>
@@ -42,25 +43,25 @@ struct Effects {
     [[nodiscard]] static Range range(const std::string& name);
 };
 
-/// Datasheet parameters (ema-reference.md section 1), SI units.
+/// Datasheet parameters (ema-reference.md section 1), SI units: the defaults are sim::ema_ref_1 (physics.hpp).
 struct EmaParams {
-    double v_dc_v = 270.0;
-    double r_ohm = 1.0;
-    double l_h = 2.5e-3;
-    double k_t_nm_per_a = 0.2;
-    double i_max_a = 20.0;
-    double t_max_nm = 4.0;
-    double w_max_rad_s = 838.0;
-    double j_kgm2 = 1.65e-4;
-    double tau = 800.0;
-    double k_theta_per_s = 30.0;
-    double k_w_a_s_per_rad = 0.25;
-    double stop_deg = 25.0;
-    double fdj_nm = 0.08;
-    double fsj_nm = 0.12;
-    double eta_o = 0.85;
-    double eta_a = 0.823788;  ///< overwritten from eta_o by eq. (4) unless set explicitly
-    double dt_s = 1e-6;
+    double v_dc_v = ema_ref_1::kVdcV;
+    double r_ohm = ema_ref_1::kROhm;
+    double l_h = ema_ref_1::kLH;
+    double k_t_nm_per_a = ema_ref_1::kKtNmPerA;
+    double i_max_a = ema_ref_1::kIMaxA;
+    double t_max_nm = ema_ref_1::kTMaxNm;
+    double w_max_rad_s = ema_ref_1::kWMaxRadS;
+    double j_kgm2 = ema_ref_1::kJKgm2;
+    double tau = ema_ref_1::kTau;
+    double k_theta_per_s = ema_ref_1::kKThetaPerS;
+    double k_w_a_s_per_rad = ema_ref_1::kKwASPerRad;
+    double stop_deg = ema_ref_1::kStopDeg;
+    double fdj_nm = ema_ref_1::kFdjNm;
+    double fsj_nm = ema_ref_1::kFsjNm;
+    double eta_o = ema_ref_1::kEtaO;
+    double eta_a = ema_ref_1::kEtaA;  ///< overwritten from eta_o by eq. (4) unless set explicitly
+    double dt_s = ema_ref_1::kDtS;
     Effects effects;
     /// Extra torque and sensor terms as data (terms.hpp); empty for the datasheet. JSON key "terms".
     std::vector<Term> terms;
