@@ -3,6 +3,7 @@
 #include "discovery/fits/fits.hpp"
 
 #include "estimation/health_estimate.hpp"
+#include "estimation/physics_friction_law.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -22,9 +23,7 @@ void record_health(std::vector<HealthValue>& health, const FitResult& fit) {
             h->std_error = f.std_error;
             h->source = "refit";
             constexpr double kSlopeStep = 1e-6;
-            const double slope = (sim::eta_a_from_eta_o(fit.params.eta_o + kSlopeStep, fit.params.tau) -
-                                  sim::eta_a_from_eta_o(fit.params.eta_o - kSlopeStep, fit.params.tau)) /
-                                 (2 * kSlopeStep);
+            const double slope = eta_a_derivative_central(fit.params.eta_o, fit.params.tau, kSlopeStep);
             auto* eta_a_value = find_health(health, kParamEtaA);
             eta_a_value->value = fit.params.eta_a;
             eta_a_value->std_error = std::abs(slope) * f.std_error;
