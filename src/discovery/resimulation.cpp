@@ -258,64 +258,83 @@ ErrorMetrics model_error(const RunSignals& a, const RunSignals& b, const std::ve
     return e;
 }
 
-FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
-                              const std::vector<std::string>& names, const std::vector<char>& mask,
-                              double fsj_base_nm, std::size_t window_samples, const sim::EmaParams* reference,
-                              int max_iterations, const NoiseFloor* trajectory_floor) {
-    FitResult fr;
-    // Rows: sums of the torque residual over windows of up to kFitWindowSamples consecutive masked
-    // samples (the derivative noise of eq. 7 telescopes in a window sum).
-    std::vector<std::vector<std::size_t>> windows;
-    for (std::size_t k = 0; k < mask.size(); ++k) {
-        if (!mask[k]) continue;
-        if (windows.empty() || windows.back().size() >= window_samples || windows.back().back() + 1 != k) {
-            windows.emplace_back();
+namespace {
+
+/// The rows of a fit: sums of the torque residual over windows of up to `window_samples` consecutive
+/// masked samples (the derivative noise of eq. 7 telescopes in a window sum), or with a
+/// `trajectory_floor` the trajectory rows in noise floors.
+class FitRows {
+public:
+    FitRows(const RunSignals& measured, const std::vector<char>& mask, std::size_t window_samples,
+            const NoiseFloor* trajectory_floor)
+        : measured_(measured), trajectory_floor_(trajectory_floor) {
+        for (std::size_t k = 0; k < mask.size(); ++k) {
+            if (!mask[k]) continue;
+            if (windows_.empty() || windows_.back().size() >= window_samples || windows_.back().back() + 1 != k) {
+                windows_.emplace_back();
+            }
+            windows_.back().push_back(k);
         }
-        windows.back().push_back(k);
+        m_ = static_cast<Eigen::Index>(trajectory_floor != nullptr ? kTrajectoryChannels * measured.size() : windows_.size());
     }
-    const auto m = static_cast<Eigen::Index>(trajectory_floor != nullptr ? kTrajectoryChannels * measured.size()
-                                                                         : windows.size());
-    const auto np = static_cast<Eigen::Index>(names.size());
-    // The window sums of measured minus model T_R for a re-simulated run's signals (or the
-    // trajectory rows in noise floors).
-    auto residual_of = [&](const RunSignals& sim_s) {
-        if (trajectory_floor != nullptr) {
-            const std::vector<double> rows = trajectory_rows(measured, sim_s, *trajectory_floor);
+    [[nodiscard]] Eigen::Index count() const { return m_; }
+    /// The window sums of measured minus model T_R for a re-simulated run's signals (or the
+    /// trajectory rows in noise floors).
+    [[nodiscard]] Eigen::VectorXd residual_of(const RunSignals& sim_s) const {
+        if (trajectory_floor_ != nullptr) {
+            const std::vector<double> rows = trajectory_rows(measured_, sim_s, *trajectory_floor_);
             return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(rows.data(), static_cast<Eigen::Index>(rows.size())));
         }
-        Eigen::VectorXd e(m);
-        for (Eigen::Index i = 0; i < m; ++i) {
+        Eigen::VectorXd e(m_);
+        for (Eigen::Index i = 0; i < m_; ++i) {
             double sum = 0;
-            for (std::size_t k : windows[static_cast<std::size_t>(i)]) {
-                sum += measured.residual_torque_nm[k] - sim_s.residual_torque_nm[k];
+            for (std::size_t k : windows_[static_cast<std::size_t>(i)]) {
+                sum += measured_.residual_torque_nm[k] - sim_s.residual_torque_nm[k];
             }
             e(i) = sum;
         }
         return e;
-    };
-    // One batch of re-simulations (resimulate_many: side by side in SIMD lanes) evaluates a trial
-    // point q together with the forward-difference steps around it, so that when q is accepted the
-    // next iteration's Jacobian is already there. The further trials of the iteration (larger
-    // damping, each known before any is simulated: they differ only in lambda) run without their
-    // steps, in the free lanes of that batch or together in the next, and the steps follow for the
-    // one accepted. Every value is that of simulating each point alone (the lanes give the scalar path's results
-    // bit for bit), so the fit is the same, bit for bit, as trying one point after another.
-    struct Point {
-        sim::EmaParams params;
-        Eigen::VectorXd e;                     ///< window sums of measured - model T_R at params
-        RunSignals signals;                    ///< the re-simulation at params
-        std::vector<Eigen::VectorXd> stepped;  ///< the same at params + h_j along parameter j
-        std::vector<double> actual;            ///< h_j after clamping to the parameter's range
-        bool with_point = true;                ///< evaluate: simulate params (false: e, signals known)
-        bool with_steps = true;                ///< evaluate: simulate the steps
-    };
-    auto with_fsj = [&](sim::EmaParams q) {
-        q.fsj_nm = std::max(fsj_base_nm, q.fdj_nm);
+    }
+
+private:
+    const RunSignals& measured_;
+    const NoiseFloor* trajectory_floor_;
+    std::vector<std::vector<std::size_t>> windows_;
+    Eigen::Index m_ = 0;
+};
+
+/// A point of the Levenberg-Marquardt fit, with what its evaluation gives.
+struct FitPoint {
+    sim::EmaParams params;
+    Eigen::VectorXd e;                     ///< window sums of measured - model T_R at params
+    RunSignals signals;                    ///< the re-simulation at params
+    std::vector<Eigen::VectorXd> stepped;  ///< the same at params + h_j along parameter j
+    std::vector<double> actual;            ///< h_j after clamping to the parameter's range
+    bool with_point = true;                ///< evaluate: simulate params (false: e, signals known)
+    bool with_steps = true;                ///< evaluate: simulate the steps
+};
+
+/// One batch of re-simulations (resimulate_many: side by side in SIMD lanes) evaluates a trial
+/// point q together with the forward-difference steps around it, so that when q is accepted the
+/// next iteration's Jacobian is already there. The further trials of the iteration (larger
+/// damping, each known before any is simulated: they differ only in lambda) run without their
+/// steps, in the free lanes of that batch or together in the next, and the steps follow for the
+/// one accepted. Every value is that of simulating each point alone (the lanes give the scalar path's results
+/// bit for bit), so the fit is the same, bit for bit, as trying one point after another.
+class FitEvaluator {
+public:
+    FitEvaluator(const Run& run, const std::vector<std::string>& names, double fsj_base_nm, const FitRows& rows,
+                 int& simulations)
+        : run_(run), names_(names), fsj_base_nm_(fsj_base_nm), rows_(rows), simulations_(simulations) {}
+
+    [[nodiscard]] sim::EmaParams with_fsj(sim::EmaParams q) const {
+        q.fsj_nm = std::max(fsj_base_nm_, q.fdj_nm);
         return q;
-    };
-    // Evaluates each of `points` (unless its with_point is false: its e and signals are known
-    // already), with its steps when its with_steps, and `extra`, whose residual goes to *extra_e.
-    auto evaluate = [&](std::vector<Point>& points, const sim::EmaParams* extra, Eigen::VectorXd* extra_e) {
+    }
+    /// Evaluates each of `points` (unless its with_point is false: its e and signals are known
+    /// already), with its steps when its with_steps, and `extra`, whose residual goes to *extra_e.
+    void evaluate(std::vector<FitPoint>& points, const sim::EmaParams* extra, Eigen::VectorXd* extra_e) const {
+        const auto np = static_cast<Eigen::Index>(names_.size());
         std::vector<sim::EmaParams> batch;
         for (auto& pt : points) {
             if (pt.with_point) batch.push_back(with_fsj(pt.params));
@@ -323,7 +342,7 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
             pt.actual.assign(static_cast<std::size_t>(np), 0.0);
             for (Eigen::Index j = 0; j < np; ++j) {
                 const auto ju = static_cast<std::size_t>(j);
-                const std::string& name = names[ju];
+                const std::string& name = names_[ju];
                 const ParamSpec& sp = spec(name);
                 const double v = get_parameter(pt.params, name);
                 double h = std::max(sp.step_abs, kStepRel * std::abs(v));
@@ -335,109 +354,159 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
             }
         }
         if (extra != nullptr) batch.push_back(with_fsj(*extra));
-        const std::vector<Run> runs = resimulate_many(run, batch);
-        fr.simulations += static_cast<int>(runs.size());
+        const std::vector<Run> runs = resimulate_many(run_, batch);
+        simulations_ += static_cast<int>(runs.size());
         std::size_t k = 0;
         for (auto& pt : points) {
             if (pt.with_point) {
                 pt.signals = run_signals(runs[k++]);
-                pt.e = residual_of(pt.signals);
+                pt.e = rows_.residual_of(pt.signals);
             }
             if (!pt.with_steps) continue;
             pt.stepped.clear();
-            for (Eigen::Index j = 0; j < np; ++j) pt.stepped.push_back(residual_of(run_signals(runs[k++])));
+            for (Eigen::Index j = 0; j < np; ++j) pt.stepped.push_back(rows_.residual_of(run_signals(runs[k++])));
         }
-        if (extra != nullptr) *extra_e = residual_of(run_signals(runs[k]));
+        if (extra != nullptr) *extra_e = rows_.residual_of(run_signals(runs[k]));
+    }
+    [[nodiscard]] const std::vector<std::string>& names() const { return names_; }
+
+private:
+    const Run& run_;
+    const std::vector<std::string>& names_;
+    double fsj_base_nm_;
+    const FitRows& rows_;
+    int& simulations_;
+};
+
+/// Where the fit stands: the accepted point p (with its steps), its residual and cost, the damping.
+struct FitState {
+    sim::EmaParams p;
+    Eigen::VectorXd e;
+    double cost = 0;
+    double lambda = kFitStartDamping;
+    FitPoint at_p;
+};
+
+enum class FitIteration { Improved, Converged, Stuck };
+
+/// One Levenberg-Marquardt iteration from `st`: the Jacobian into `jac`, then the trials at lambda,
+/// 10 lambda, ... until one lowers the cost (Improved, or Converged when it lowers it by less than
+/// kFitRelativeTolerance); Stuck when none does.
+FitIteration fit_iteration(const FitEvaluator& ev, FitState& st, Eigen::MatrixXd& jac) {
+    const std::vector<std::string>& names = ev.names();
+    const auto np = static_cast<Eigen::Index>(names.size());
+    sim::EmaParams& p = st.p;
+    Eigen::VectorXd& e = st.e;
+    double& cost = st.cost;
+    double& lambda = st.lambda;
+    FitPoint& at_p = st.at_p;
+    // Forward differences of the model's T_R (e = y - f, so df = -(e_step - e)).
+    for (Eigen::Index j = 0; j < np; ++j) {
+        const auto ju = static_cast<std::size_t>(j);
+        jac.col(j) = -(at_p.stepped[ju] - e) / at_p.actual[ju];
+    }
+    const Eigen::MatrixXd jtj = jac.transpose() * jac;
+    const Eigen::VectorXd jte = jac.transpose() * e;
+    // The trial point at damping lam.
+    auto trial_at = [&](double lam) {
+        Eigen::MatrixXd a = jtj;
+        a.diagonal() += lam * jtj.diagonal().cwiseMax(1e-30);
+        const Eigen::VectorXd delta = a.ldlt().solve(jte);
+        FitPoint q;
+        q.params = p;
+        for (Eigen::Index j = 0; j < np; ++j) {
+            const std::string& name = names[static_cast<std::size_t>(j)];
+            set_parameter(q.params, name, get_parameter(p, name) + delta(j));
+        }
+        return q;
     };
+    bool improved = false;
+    bool converged = false;
+    auto accept = [&](FitPoint& q) {
+        const double cq = q.e.squaredNorm();
+        const double gain = (cost - cq) / cost;
+        p = q.params;
+        e = q.e;
+        at_p = std::move(q);
+        cost = cq;
+        lambda = std::max(lambda / 10.0, 1e-9);
+        improved = true;
+        if (gain < kFitRelativeTolerance) converged = true;
+    };
+    // The trials at lambda, 10 lambda, ... in order; the first that lowers the cost is taken. The
+    // first goes with its steps; further ones share its batch while they fill the last vector's
+    // free lanes (no more vector passes), the rest follow in one batch if the first ones fail.
+    std::vector<double> lambdas;
+    std::vector<FitPoint> trials;
+    for (int tries = 0; tries < kFitTriesPerIteration; ++tries) {
+        lambdas.push_back(lambda);
+        trials.push_back(trial_at(lambda));
+        trials.back().with_steps = tries == 0;
+        lambda *= 10.0;  // the damping after this trial fails
+    }
+    const auto first_lanes = static_cast<std::size_t>(1 + np);
+    const std::size_t vector_lanes = std::max(1, sim::simd_target().lanes);
+    const std::size_t free_lanes = (vector_lanes - first_lanes % vector_lanes) % vector_lanes;
+    const std::size_t first_batch = std::min(trials.size(), 1 + free_lanes);
+    std::size_t evaluated = 0;
+    while (!improved && evaluated < trials.size()) {
+        const std::size_t count = evaluated == 0 ? first_batch : trials.size() - evaluated;
+        std::vector<FitPoint> batch(std::make_move_iterator(trials.begin() + static_cast<std::ptrdiff_t>(evaluated)),
+                                    std::make_move_iterator(trials.begin() + static_cast<std::ptrdiff_t>(evaluated + count)));
+        ev.evaluate(batch, nullptr, nullptr);
+        for (std::size_t i = 0; i < batch.size() && !improved; ++i) {
+            if (!(batch[i].e.squaredNorm() < cost)) continue;
+            lambda = lambdas[evaluated + i];
+            if (!batch[i].with_steps) {
+                batch[i].with_point = false;
+                batch[i].with_steps = true;
+                std::vector<FitPoint> accepted(1, std::move(batch[i]));
+                ev.evaluate(accepted, nullptr, nullptr);
+                accept(accepted[0]);
+            } else {
+                accept(batch[i]);
+            }
+        }
+        evaluated += count;
+    }
+    if (!improved) return FitIteration::Stuck;
+    return converged ? FitIteration::Converged : FitIteration::Improved;
+}
+
+}  // namespace
+
+FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
+                              const std::vector<std::string>& names, const std::vector<char>& mask,
+                              double fsj_base_nm, std::size_t window_samples, const sim::EmaParams* reference,
+                              int max_iterations, const NoiseFloor* trajectory_floor) {
+    FitResult fr;
+    const FitRows rows(measured, mask, window_samples, trajectory_floor);
+    const Eigen::Index m = rows.count();
+    const auto np = static_cast<Eigen::Index>(names.size());
+    const FitEvaluator ev(run, names, fsj_base_nm, rows, fr.simulations);
     fr.rows = static_cast<std::size_t>(m);
-    std::vector<Point> current(1);
+    std::vector<FitPoint> current(1);
     current[0].params = start;
     Eigen::VectorXd e_reference;
-    evaluate(current, reference, &e_reference);
+    ev.evaluate(current, reference, &e_reference);
     if (reference != nullptr) fr.cost_reference = e_reference.squaredNorm();
-    sim::EmaParams p = start;
-    Eigen::VectorXd e = current[0].e;
-    fr.cost_start = e.squaredNorm();
-    double cost = fr.cost_start;
-    double lambda = kFitStartDamping;
+    FitState st;
+    st.p = start;
+    st.e = current[0].e;
+    fr.cost_start = st.e.squaredNorm();
+    st.cost = fr.cost_start;
     Eigen::MatrixXd jac(m, np);
-    Point at_p = std::move(current[0]);  // p with its steps
+    st.at_p = std::move(current[0]);  // p with its steps
     for (int it = 0; it < max_iterations; ++it) {
         fr.iterations = it + 1;
-        // Forward differences of the model's T_R (e = y - f, so df = -(e_step - e)).
-        for (Eigen::Index j = 0; j < np; ++j) {
-            const auto ju = static_cast<std::size_t>(j);
-            jac.col(j) = -(at_p.stepped[ju] - e) / at_p.actual[ju];
-        }
-        const Eigen::MatrixXd jtj = jac.transpose() * jac;
-        const Eigen::VectorXd jte = jac.transpose() * e;
-        // The trial point at damping lam.
-        auto trial_at = [&](double lam) {
-            Eigen::MatrixXd a = jtj;
-            a.diagonal() += lam * jtj.diagonal().cwiseMax(1e-30);
-            const Eigen::VectorXd delta = a.ldlt().solve(jte);
-            Point q;
-            q.params = p;
-            for (Eigen::Index j = 0; j < np; ++j) {
-                const std::string& name = names[static_cast<std::size_t>(j)];
-                set_parameter(q.params, name, get_parameter(p, name) + delta(j));
-            }
-            return q;
-        };
-        bool improved = false;
-        auto accept = [&](Point& q) {
-            const double cq = q.e.squaredNorm();
-            const double gain = (cost - cq) / cost;
-            p = q.params;
-            e = q.e;
-            at_p = std::move(q);
-            cost = cq;
-            lambda = std::max(lambda / 10.0, 1e-9);
-            improved = true;
-            if (gain < kFitRelativeTolerance) it = max_iterations;  // converged
-        };
-        // The trials at lambda, 10 lambda, ... in order; the first that lowers the cost is taken. The
-        // first goes with its steps; further ones share its batch while they fill the last vector's
-        // free lanes (no more vector passes), the rest follow in one batch if the first ones fail.
-        std::vector<double> lambdas;
-        std::vector<Point> trials;
-        for (int tries = 0; tries < kFitTriesPerIteration; ++tries) {
-            lambdas.push_back(lambda);
-            trials.push_back(trial_at(lambda));
-            trials.back().with_steps = tries == 0;
-            lambda *= 10.0;  // the damping after this trial fails
-        }
-        const auto first_lanes = static_cast<std::size_t>(1 + np);
-        const std::size_t vector_lanes = std::max(1, sim::simd_target().lanes);
-        const std::size_t free_lanes = (vector_lanes - first_lanes % vector_lanes) % vector_lanes;
-        const std::size_t first_batch = std::min(trials.size(), 1 + free_lanes);
-        std::size_t evaluated = 0;
-        while (!improved && evaluated < trials.size()) {
-            const std::size_t count = evaluated == 0 ? first_batch : trials.size() - evaluated;
-            std::vector<Point> batch(std::make_move_iterator(trials.begin() + static_cast<std::ptrdiff_t>(evaluated)),
-                                     std::make_move_iterator(trials.begin() + static_cast<std::ptrdiff_t>(evaluated + count)));
-            evaluate(batch, nullptr, nullptr);
-            for (std::size_t i = 0; i < batch.size() && !improved; ++i) {
-                if (!(batch[i].e.squaredNorm() < cost)) continue;
-                lambda = lambdas[evaluated + i];
-                if (!batch[i].with_steps) {
-                    batch[i].with_point = false;
-                    batch[i].with_steps = true;
-                    std::vector<Point> accepted(1, std::move(batch[i]));
-                    evaluate(accepted, nullptr, nullptr);
-                    accept(accepted[0]);
-                } else {
-                    accept(batch[i]);
-                }
-            }
-            evaluated += count;
-        }
-        if (!improved) break;
+        if (fit_iteration(ev, st, jac) != FitIteration::Improved) break;
     }
+    const sim::EmaParams& p = st.p;
+    const double cost = st.cost;
     fr.params = p;
     fr.params.fsj_nm = std::max(fsj_base_nm, p.fdj_nm);
     fr.cost_end = cost;
-    fr.signals = std::move(at_p.signals);
+    fr.signals = std::move(st.at_p.signals);
     // Standard errors from the last Jacobian: cov = s^2 (J^T J)^-1, s^2 = cost / (m - p).
     const Eigen::MatrixXd jtj = jac.transpose() * jac;
     const double s2 = cost / std::max<double>(1.0, static_cast<double>(m - np));
