@@ -1,5 +1,6 @@
 #include "discovery/across_loads.hpp"
 
+#include "discovery/fit_parameter.hpp"
 #include "discovery/physics_names.hpp"
 #include "discovery/screen_windows.hpp"
 #include "discovery/resimulation.hpp"
@@ -55,7 +56,7 @@ double term_start(const sim::Term& shape, const Run& run, const DiscoveryReport&
     p.eta_o = sim::EmaParams::datasheet().eta_o;
     p.eta_a = sim::eta_a_from_eta_o(p.eta_o, p.tau);
     const RunSignals m = run_signals(resimulate(run, p));
-    const std::vector<double> f = sensitivity(run, p, m, "fdj_nm");
+    const std::vector<double> f = sensitivity(run, p, m, fit_parameter_name(FitParameter::fdj()));
     sim::Term unit = shape;
     unit.coefficient = 1.0;
     const std::vector<double> x = term_signature(s, unit);
@@ -122,7 +123,7 @@ std::optional<LoadHypothesis> judge_hypothesis(const std::optional<sim::Term>& s
     // Fitted on the torque residual (window sums over the comparison samples, as the single run's
     // efficiency stage does: its standard errors are those of nearly independent rows), judged on
     // the trajectory.
-    auto fit = [&](std::size_t i, const sim::EmaParams& start, const std::vector<std::string>& names) {
+    auto fit = [&](std::size_t i, const sim::EmaParams& start, const std::vector<FitParameter>& names) {
         return fit_by_resimulation(*runs[i], signals[i], start, names, masks[i], start.fsj_nm, kFitWindowSamples, nullptr,
                                    kLoadFitIterations);
     };
@@ -135,10 +136,10 @@ std::optional<LoadHypothesis> judge_hypothesis(const std::optional<sim::Term>& s
             const double v0 = shape ? term_start(*shape, *runs[i], reports[i], seen, signals[i], masks[i])
                                     : (reports[i].efficiency.ran ? reports[i].efficiency.eta_o : base_model(reports[i], seen).eta_o);
             const sim::EmaParams start = start_of(i, v0);
-            const std::string name = shape ? term_parameter(start.terms.size() - 1) : "eta_o";
-            const FitResult f = fit(i, start, {"fdj_nm", name});
+            const FitParameter name = shape ? FitParameter::term(start.terms.size() - 1) : FitParameter::eta_o();
+            const FitResult f = fit(i, start, {FitParameter::fdj(), name});
             for (const auto& fv : f.values) {
-                if (fv.name == name) {
+                if (fv.parameter == name) {
                     v = fv.value;
                     se = fv.std_error;
                 }
@@ -165,7 +166,7 @@ std::optional<LoadHypothesis> judge_hypothesis(const std::optional<sim::Term>& s
     // 2. The pooled value on every run, FDJ refitted.
     double sum = 0;
     for (std::size_t i = 0; i < runs.size(); ++i) {
-        const FitResult f = fit(i, start_of(i, h.pooled), {"fdj_nm"});
+        const FitResult f = fit(i, start_of(i, h.pooled), {FitParameter::fdj()});
         h.costs.push_back(trajectory_error(signals[i], f.signals, reports[i].floor).cost);
         sum += h.costs.back();
     }

@@ -2,6 +2,7 @@
 
 #include "core/emadiag_error.hpp"
 #include "discovery/model_correction.hpp"
+#include "discovery/fit_parameter.hpp"
 #include "discovery/physics_names.hpp"
 #include "discovery/screen_windows.hpp"
 #include "discovery/resimulation.hpp"
@@ -147,9 +148,9 @@ void size_hypotheses(BreakawayAcross& out, const Thresholds& meas, const Thresho
 /// the hypotheses sorted by their DYN cost, best first.
 void refit_on_dyn(BreakawayAcross& out, const Run& dyn, const DiscoveryReport& dyn_report) {
     const RunSignals s = run_signals(dyn);
-    std::vector<std::string> names = {"fdj_nm"};
+    std::vector<FitParameter> names = {FitParameter::fdj()};
     for (const auto& h : dyn_report.model.health) {
-        if (h.name == kParamEtaO && (h.source == "estimated" || h.source == "refit")) names.push_back("eta_o");
+        if (h.name == kParamEtaO && (h.source == "estimated" || h.source == "refit")) names.push_back(FitParameter::eta_o());
     }
     const std::vector<char> no_mask(s.size(), char{1});  // not used by a fit on the trajectory
     sim::EmaParams dyn_p = dyn_report.model.params;
@@ -171,7 +172,7 @@ void refit_on_dyn(BreakawayAcross& out, const Run& dyn, const DiscoveryReport& d
         h.dyn_error = trajectory_error(s, f.signals, dyn_report.floor);
         h.dyn_cost = h.dyn_error.cost;
         for (const auto& v : f.values) {
-            if (v.name == "fdj_nm") {
+            if (v.parameter == FitParameter::fdj()) {
                 h.fdj_nm = v.value;
                 h.fdj_se_nm = v.std_error;
             }

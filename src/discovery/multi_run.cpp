@@ -3,6 +3,7 @@
 #include "core/emadiag_error.hpp"
 #include "discovery/across_loads.hpp"
 #include "discovery/breakaway_across.hpp"
+#include "discovery/fit_parameter.hpp"
 #include "discovery/physics_names.hpp"
 #include "discovery/screen_windows.hpp"
 #include "estimation/health_estimate.hpp"
@@ -46,7 +47,7 @@ bool step_value(const DiscoveryStep& st, std::string& parameter, double& value, 
         return true;
     }
     for (const auto& f : st.fitted) {
-        if (f.name != "fdj_nm" && f.name != "eta_o") {
+        if (!f.parameter.is_health()) {
             parameter = f.name;
             value = f.value;
             se = f.std_error;
@@ -73,13 +74,13 @@ void joint_screening(AcrossRunsReport& out, const std::vector<const Run*>& analy
         offsets.push_back(all.size());
         append(all, s, mask, all_mask);
         for (std::size_t k = 0; k < s.size(); ++k) in.residual_nm.push_back(s.residual_torque_nm[k] - m.residual_torque_nm[k]);
-        std::vector<std::string> names = {"fdj_nm"};
+        std::vector<FitParameter> names = {FitParameter::fdj()};
         for (const auto& h : out.reports[i].model.health) {
-            if (h.name == kParamEtaO && (h.source == "estimated" || h.source == "refit")) names.push_back("eta_o");
+            if (h.name == kParamEtaO && (h.source == "estimated" || h.source == "refit")) names.push_back(FitParameter::eta_o());
         }
         for (const auto& name : names) {
             std::vector<double> col(offsets.back(), 0.0);
-            const auto c = sensitivity(run, p, m, name);
+            const auto c = sensitivity(run, p, m, fit_parameter_name(name));
             col.insert(col.end(), c.begin(), c.end());
             in.base_columns.push_back(col);
         }

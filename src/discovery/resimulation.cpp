@@ -10,7 +10,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
+#include <optional>
 #include <thread>
 #include <utility>
 
@@ -19,7 +21,6 @@ namespace {
 
 /// Range and finite-difference step of each fittable parameter.
 struct ParamSpec {
-    std::string name;
     double lo, hi;
     double step_abs;  ///< finite-difference step floor
 };
@@ -27,63 +28,74 @@ struct ParamSpec {
 /// An effect fitted by discovery: its finite-difference step floor and, where the fit must stay
 /// inside the simulator's range (sim::Effects::range, the one definition), the lower end and why.
 struct EffectFit {
-    const char* name;
+    FittedEffect effect;
     double step_abs;
     double fit_lo;  ///< NaN: the simulator's lower end
 };
 constexpr double kSimulatorLo = std::numeric_limits<double>::quiet_NaN();
+/// In the order of FittedEffect.
 constexpr EffectFit kEffectFits[] = {
-    {"viscous", 1e-7, kSimulatorLo},
-    {"stribeck_amplitude", 2e-3, kSimulatorLo},
+    {FittedEffect::Viscous, 1e-7, kSimulatorLo},
+    {FittedEffect::StribeckAmplitude, 2e-3, kSimulatorLo},
     // the simulator takes 1e-6 rad/s; a fit starts at its 1 rad/s step, so a step never leaves the range
-    {"stribeck_speed", 1.0, 1.0},
-    {"spall_amplitude", 2e-3, kSimulatorLo},
-    {"spall_center", 0.02, kSimulatorLo},
+    {FittedEffect::StribeckSpeed, 1.0, 1.0},
+    {FittedEffect::SpallAmplitude, 2e-3, kSimulatorLo},
+    {FittedEffect::SpallCenter, 0.02, kSimulatorLo},
     // the simulator takes 1e-6 deg; a fit keeps 2.5 of its 0.02 deg steps above zero
-    {"spall_width", 0.02, 0.05},
-    {"ripple_amplitude", 2e-3, kSimulatorLo},
-    {"current_gain_error", 2e-4, kSimulatorLo},
-    {"hinge_offset", 0.5, kSimulatorLo},
+    {FittedEffect::SpallWidth, 0.02, 0.05},
+    {FittedEffect::RippleAmplitude, 2e-3, kSimulatorLo},
+    {FittedEffect::CurrentGainError, 2e-4, kSimulatorLo},
+    {FittedEffect::HingeOffset, 0.5, kSimulatorLo},
     // the simulator reads 0 as "the datasheet J"; a fitted inertia is one step above it
-    {"true_inertia", 1e-7, 1e-7},
+    {FittedEffect::TrueInertia, 1e-7, 1e-7},
 };
+static_assert(std::size(kEffectFits) == kFittedEffectCount);
 
-const std::vector<ParamSpec>& specs() {
-    static const std::vector<ParamSpec> all = [] {
-        std::vector<ParamSpec> v = {
-            {"fdj_nm", 0.0, 10.0, 2e-4},
-            {"eta_o", 0.3, 0.9999, 2e-3},  // below 1: eq. (4) gives eta_A = 1 at eta_O = 1, outside the simulator range
-        };
-        for (const auto& e : kEffectFits) {
-            const sim::Effects::Range r = sim::Effects::range(e.name);
-            v.push_back({e.name, std::isnan(e.fit_lo) ? r.min : e.fit_lo, r.max, e.step_abs});
-        }
-        return v;
-    }();
-    return all;
-}
+constexpr ParamSpec kFdjSpec = {0.0, 10.0, 2e-4};
+constexpr ParamSpec kEtaOSpec = {0.3, 0.9999, 2e-3};  // below 1: eq. (4) gives eta_A = 1 at eta_O = 1, outside the simulator range
 /// Relative finite-difference step (the simulator's chatter makes smaller steps noisy).
 constexpr double kStepRel = 0.005;
 
-/// Coefficients of sim::Term entries are named "term:K" (K the index in EmaParams::terms): any
-/// value; the step is relative (kStepRel) with this floor.
-const ParamSpec kTermSpec = {"term", -1e12, 1e12, 1e-12};
+/// Coefficients of sim::Term entries (FitParameter::term): any value; the step is relative
+/// (kStepRel) with this floor.
+constexpr ParamSpec kTermSpec = {-1e12, 1e12, 1e-12};
 
-std::size_t term_index(const std::string& name, const sim::EmaParams& p) {
-    const std::size_t k = std::stoul(name.substr(5));
+const ParamSpec& effect_spec(FittedEffect effect) {
+    static const std::vector<ParamSpec> all = [] {
+        std::vector<ParamSpec> v;
+        for (const auto& e : kEffectFits) {
+            const sim::Effects::Range r = sim::Effects::range(effect_name(e.effect));
+            v.push_back({std::isnan(e.fit_lo) ? r.min : e.fit_lo, r.max, e.step_abs});
+        }
+        return v;
+    }();
+    return all.at(static_cast<std::size_t>(effect));
+}
+
+const ParamSpec& spec(const FitParameter& parameter) {
+    switch (parameter.kind()) {
+        case FitParameter::Kind::Fdj: return kFdjSpec;
+        case FitParameter::Kind::EtaO: return kEtaOSpec;
+        case FitParameter::Kind::Effect: return effect_spec(parameter.fitted_effect());
+        case FitParameter::Kind::Term: return kTermSpec;
+    }
+    throw EmadiagError("discovery: parameter '" + fit_parameter_name(parameter) + "' cannot be fitted");
+}
+
+std::size_t term_index(const FitParameter& parameter, const sim::EmaParams& p) {
+    const std::size_t k = parameter.term_index();
     if (k >= p.terms.size()) {
-        throw EmadiagError("discovery: parameter '" + name + "': the model has " + std::to_string(p.terms.size()) +
-                           " terms");
+        throw EmadiagError("discovery: parameter '" + fit_parameter_name(parameter) + "': the model has " +
+                           std::to_string(p.terms.size()) + " terms");
     }
     return k;
 }
 
-const ParamSpec& spec(const std::string& name) {
-    if (is_term_parameter(name)) return kTermSpec;
-    for (const auto& s : specs()) {
-        if (name == s.name) return s;
-    }
-    throw EmadiagError("discovery: parameter '" + name + "' cannot be fitted");
+std::vector<FitParameter> parameters_from_names(const std::vector<std::string>& names) {
+    std::vector<FitParameter> out;
+    out.reserve(names.size());
+    for (const auto& n : names) out.push_back(fit_parameter_from_name(n));
+    return out;
 }
 
 double rms(double sum_sq, std::size_t n) { return n ? std::sqrt(sum_sq / static_cast<double>(n)) : 0.0; }
@@ -124,45 +136,58 @@ std::vector<double> trajectory_rows(const RunSignals& a, const RunSignals& b, co
 }
 
 bool is_term_parameter(const std::string& name) {
-    return name.size() > 5 && name.compare(0, 5, "term:") == 0 &&
-           name.find_first_not_of("0123456789", 5) == std::string::npos;
+    const std::optional<FitParameter> p = find_fit_parameter(name);
+    return p && p->kind() == FitParameter::Kind::Term;
 }
 
-FitRange fit_range(const std::string& name) {
-    const ParamSpec& s = spec(name);
+FitRange fit_range(const FitParameter& parameter) {
+    const ParamSpec& s = spec(parameter);
     return {s.lo, s.hi};
 }
 
+FitRange fit_range(const std::string& name) { return fit_range(fit_parameter_from_name(name)); }
+
 std::vector<std::string> fitted_effect_names() {
     std::vector<std::string> v;
-    for (const auto& e : kEffectFits) v.emplace_back(e.name);
+    for (const auto& e : kEffectFits) v.emplace_back(effect_name(e.effect));
     return v;
 }
 
-std::string term_parameter(std::size_t index) { return "term:" + std::to_string(index); }
+std::string term_parameter(std::size_t index) { return fit_parameter_name(FitParameter::term(index)); }
+
+double get_parameter(const sim::EmaParams& p, const FitParameter& parameter) {
+    switch (parameter.kind()) {
+        case FitParameter::Kind::Term: return p.terms[term_index(parameter, p)].coefficient;
+        case FitParameter::Kind::Fdj: return p.fdj_nm;
+        case FitParameter::Kind::EtaO: return p.eta_o;
+        case FitParameter::Kind::Effect: return p.effects.get(effect_name(parameter.fitted_effect()));
+    }
+    throw EmadiagError("discovery: parameter '" + fit_parameter_name(parameter) + "' cannot be fitted");
+}
 
 double get_parameter(const sim::EmaParams& p, const std::string& name) {
-    if (is_term_parameter(name)) return p.terms[term_index(name, p)].coefficient;
-    if (name == "fdj_nm") return p.fdj_nm;
-    if (name == "eta_o") return p.eta_o;
-    (void)spec(name);
-    return p.effects.get(name);
+    return get_parameter(p, fit_parameter_from_name(name));
+}
+
+void set_parameter(sim::EmaParams& p, const FitParameter& parameter, double value) {
+    const ParamSpec& s = spec(parameter);
+    value = std::clamp(value, s.lo, s.hi);
+    switch (parameter.kind()) {
+        case FitParameter::Kind::Term: p.terms[term_index(parameter, p)].coefficient = value; break;
+        case FitParameter::Kind::Fdj:
+            p.fdj_nm = value;
+            p.fsj_nm = std::max(p.fsj_nm, p.fdj_nm);
+            break;
+        case FitParameter::Kind::EtaO:
+            p.eta_o = value;
+            p.eta_a = sim::eta_a_from_eta_o(value, p.tau);
+            break;
+        case FitParameter::Kind::Effect: p.effects.set(effect_name(parameter.fitted_effect()), value); break;
+    }
 }
 
 void set_parameter(sim::EmaParams& p, const std::string& name, double value) {
-    const ParamSpec& s = spec(name);
-    value = std::clamp(value, s.lo, s.hi);
-    if (is_term_parameter(name)) {
-        p.terms[term_index(name, p)].coefficient = value;
-    } else if (name == "fdj_nm") {
-        p.fdj_nm = value;
-        p.fsj_nm = std::max(p.fsj_nm, p.fdj_nm);
-    } else if (name == "eta_o") {
-        p.eta_o = value;
-        p.eta_a = sim::eta_a_from_eta_o(value, p.tau);
-    } else {
-        p.effects.set(name, value);
-    }
+    set_parameter(p, fit_parameter_from_name(name), value);
 }
 
 sim::SimConfig resim_config(const Run& run, const sim::EmaParams& params) {
@@ -323,9 +348,9 @@ struct FitPoint {
 /// bit for bit), so the fit is the same, bit for bit, as trying one point after another.
 class FitEvaluator {
 public:
-    FitEvaluator(const Run& run, const std::vector<std::string>& names, double fsj_base_nm, const FitRows& rows,
+    FitEvaluator(const Run& run, const std::vector<FitParameter>& parameters, double fsj_base_nm, const FitRows& rows,
                  int& simulations)
-        : run_(run), names_(names), fsj_base_nm_(fsj_base_nm), rows_(rows), simulations_(simulations) {}
+        : run_(run), parameters_(parameters), fsj_base_nm_(fsj_base_nm), rows_(rows), simulations_(simulations) {}
 
     [[nodiscard]] sim::EmaParams with_fsj(sim::EmaParams q) const {
         q.fsj_nm = std::max(fsj_base_nm_, q.fdj_nm);
@@ -334,7 +359,7 @@ public:
     /// Evaluates each of `points` (unless its with_point is false: its e and signals are known
     /// already), with its steps when its with_steps, and `extra`, whose residual goes to *extra_e.
     void evaluate(std::vector<FitPoint>& points, const sim::EmaParams* extra, Eigen::VectorXd* extra_e) const {
-        const auto np = static_cast<Eigen::Index>(names_.size());
+        const auto np = static_cast<Eigen::Index>(parameters_.size());
         std::vector<sim::EmaParams> batch;
         for (auto& pt : points) {
             if (pt.with_point) batch.push_back(with_fsj(pt.params));
@@ -342,14 +367,14 @@ public:
             pt.actual.assign(static_cast<std::size_t>(np), 0.0);
             for (Eigen::Index j = 0; j < np; ++j) {
                 const auto ju = static_cast<std::size_t>(j);
-                const std::string& name = names_[ju];
-                const ParamSpec& sp = spec(name);
-                const double v = get_parameter(pt.params, name);
+                const FitParameter& parameter = parameters_[ju];
+                const ParamSpec& sp = spec(parameter);
+                const double v = get_parameter(pt.params, parameter);
                 double h = std::max(sp.step_abs, kStepRel * std::abs(v));
                 if (v + h > sp.hi) h = -h;
                 sim::EmaParams q = pt.params;
-                set_parameter(q, name, v + h);
-                pt.actual[ju] = get_parameter(q, name) - v;
+                set_parameter(q, parameter, v + h);
+                pt.actual[ju] = get_parameter(q, parameter) - v;
                 batch.push_back(with_fsj(q));
             }
         }
@@ -368,11 +393,11 @@ public:
         }
         if (extra != nullptr) *extra_e = rows_.residual_of(run_signals(runs[k]));
     }
-    [[nodiscard]] const std::vector<std::string>& names() const { return names_; }
+    [[nodiscard]] const std::vector<FitParameter>& parameters() const { return parameters_; }
 
 private:
     const Run& run_;
-    const std::vector<std::string>& names_;
+    const std::vector<FitParameter>& parameters_;
     double fsj_base_nm_;
     const FitRows& rows_;
     int& simulations_;
@@ -393,8 +418,8 @@ enum class FitIteration { Improved, Converged, Stuck };
 /// 10 lambda, ... until one lowers the cost (Improved, or Converged when it lowers it by less than
 /// kFitRelativeTolerance); Stuck when none does.
 FitIteration fit_iteration(const FitEvaluator& ev, FitState& st, Eigen::MatrixXd& jac) {
-    const std::vector<std::string>& names = ev.names();
-    const auto np = static_cast<Eigen::Index>(names.size());
+    const std::vector<FitParameter>& parameters = ev.parameters();
+    const auto np = static_cast<Eigen::Index>(parameters.size());
     sim::EmaParams& p = st.p;
     Eigen::VectorXd& e = st.e;
     double& cost = st.cost;
@@ -415,8 +440,8 @@ FitIteration fit_iteration(const FitEvaluator& ev, FitState& st, Eigen::MatrixXd
         FitPoint q;
         q.params = p;
         for (Eigen::Index j = 0; j < np; ++j) {
-            const std::string& name = names[static_cast<std::size_t>(j)];
-            set_parameter(q.params, name, get_parameter(p, name) + delta(j));
+            const FitParameter& parameter = parameters[static_cast<std::size_t>(j)];
+            set_parameter(q.params, parameter, get_parameter(p, parameter) + delta(j));
         }
         return q;
     };
@@ -476,14 +501,14 @@ FitIteration fit_iteration(const FitEvaluator& ev, FitState& st, Eigen::MatrixXd
 }  // namespace
 
 FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
-                              const std::vector<std::string>& names, const std::vector<char>& mask,
+                              const std::vector<FitParameter>& parameters, const std::vector<char>& mask,
                               double fsj_base_nm, std::size_t window_samples, const sim::EmaParams* reference,
                               int max_iterations, const NoiseFloor* trajectory_floor) {
     FitResult fr;
     const FitRows rows(measured, mask, window_samples, trajectory_floor);
     const Eigen::Index m = rows.count();
-    const auto np = static_cast<Eigen::Index>(names.size());
-    const FitEvaluator ev(run, names, fsj_base_nm, rows, fr.simulations);
+    const auto np = static_cast<Eigen::Index>(parameters.size());
+    const FitEvaluator ev(run, parameters, fsj_base_nm, rows, fr.simulations);
     fr.rows = static_cast<std::size_t>(m);
     std::vector<FitPoint> current(1);
     current[0].params = start;
@@ -512,10 +537,18 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
     const double s2 = cost / std::max<double>(1.0, static_cast<double>(m - np));
     const Eigen::MatrixXd cov = s2 * jtj.completeOrthogonalDecomposition().pseudoInverse();
     for (Eigen::Index j = 0; j < np; ++j) {
-        const std::string& name = names[static_cast<std::size_t>(j)];
-        fr.values.push_back({name, get_parameter(p, name), std::sqrt(std::max(0.0, cov(j, j)))});
+        const FitParameter& parameter = parameters[static_cast<std::size_t>(j)];
+        fr.values.emplace_back(parameter, get_parameter(p, parameter), std::sqrt(std::max(0.0, cov(j, j))));
     }
     return fr;
+}
+
+FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
+                              const std::vector<std::string>& names, const std::vector<char>& mask,
+                              double fsj_base_nm, std::size_t window_samples, const sim::EmaParams* reference,
+                              int max_iterations, const NoiseFloor* trajectory_floor) {
+    return fit_by_resimulation(run, measured, start, parameters_from_names(names), mask, fsj_base_nm, window_samples,
+                               reference, max_iterations, trajectory_floor);
 }
 
 }  // namespace emadiag::discovery

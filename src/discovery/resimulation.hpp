@@ -3,6 +3,7 @@
 // re-simulation (docs/discovery.md "Fit"). The run's case, sequence, length and constants (k_t,
 // J, tau) come from the Run; noise is none; nothing is read from true_* / effect_* metadata.
 #include "core/run.hpp"
+#include "discovery/fit_parameter.hpp"
 #include "discovery/run_signals.hpp"
 #include "discovery/trajectory.hpp"
 #include "emadiag/sim/ema_params.hpp"
@@ -61,9 +62,17 @@ inline constexpr double kKinkSecondDifferenceRadS = 3.0;
 [[nodiscard]] ErrorMetrics model_error(const RunSignals& measured, const RunSignals& model,
                                        const std::vector<char>& mask);
 
-/// A fitted parameter: "fdj_nm", "eta_o" or a sim::Effects name.
+/// A fitted parameter's value and standard error.
 struct FittedValue {
-    std::string name;
+    FittedValue() = default;
+    FittedValue(const FitParameter& fitted, double v, double se)
+        : parameter(fitted), name(fit_parameter_name(fitted)), value(v), std_error(se) {}
+    /// For discovery.cpp, which still names parameters by string (fit_parameter_from_name).
+    FittedValue(const std::string& fitted_name, double v, double se)
+        : FittedValue(fit_parameter_from_name(fitted_name), v, se) {}
+
+    FitParameter parameter = FitParameter::fdj();
+    std::string name;  ///< fit_parameter_name(parameter): what reports and JSON show
     double value = 0;
     double std_error = 0;
 };
@@ -82,7 +91,7 @@ struct FitResult {
 
 /// Levenberg-Marquardt on the torque residual (measured T_R - re-simulated T_R over `mask`, summed
 /// over windows of kFitWindowSamples consecutive samples),
-/// varying the named parameters of `start` (finite-difference Jacobian on the real simulator).
+/// varying `parameters` of `start` (finite-difference Jacobian on the real simulator).
 /// Parameters stay inside the simulator's allowed ranges; FSJ is max(fsj_base_nm, FDJ) at every
 /// trial point (the simulator needs FSJ >= FDJ; a DYN run does not identify FSJ).
 /// `window_samples` = 1 fits per sample (for a signature that changes within a window: ripple).
@@ -91,6 +100,14 @@ struct FitResult {
 /// the trajectory cost of trajectory.hpp; `mask` and `window_samples` are then not used. That is the
 /// objective for an effect the torque residual barely sees (a friction impulse while the speed
 /// crosses zero, docs/discovery.md "Low-speed friction by the trajectory").
+[[nodiscard]] FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
+                                            const std::vector<FitParameter>& parameters, const std::vector<char>& mask,
+                                            double fsj_base_nm, std::size_t window_samples = kFitWindowSamples,
+                                            const sim::EmaParams* reference = nullptr,
+                                            int max_iterations = kMaxFitIterations,
+                                            const NoiseFloor* trajectory_floor = nullptr);
+/// The same with the parameters by name (fit_parameter_from_name), for discovery.cpp until it passes
+/// FitParameter.
 [[nodiscard]] FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
                                             const std::vector<std::string>& names, const std::vector<char>& mask,
                                             double fsj_base_nm, std::size_t window_samples = kFitWindowSamples,
@@ -102,19 +119,26 @@ struct FitResult {
 [[nodiscard]] std::vector<double> trajectory_rows(const RunSignals& measured, const RunSignals& model,
                                                   const NoiseFloor& floor);
 
-/// Term coefficients are fitted by the name "term:K", K the index in EmaParams::terms.
-[[nodiscard]] bool is_term_parameter(const std::string& name);
-[[nodiscard]] std::string term_parameter(std::size_t index);
 /// The range a fit keeps one parameter in (effects: inside sim::Effects::range, narrowed only where
-/// resimulation.cpp says why); throws on a parameter that cannot be fitted.
+/// resimulation.cpp says why).
 struct FitRange {
     double lo;
     double hi;
 };
+[[nodiscard]] FitRange fit_range(const FitParameter& parameter);
+/// The same by name; throws on a parameter that cannot be fitted.
 [[nodiscard]] FitRange fit_range(const std::string& name);
 /// The effects (sim::Effects names) that discovery fits.
 [[nodiscard]] std::vector<std::string> fitted_effect_names();
-/// Reads / writes one fittable parameter of EmaParams by name (eta_o also sets eta_a by eq. 4).
+/// Reads / writes one fittable parameter of EmaParams (eta_o also sets eta_a by eq. 4; a value is kept
+/// inside fit_range). A term index beyond the model's terms throws EmadiagError.
+[[nodiscard]] double get_parameter(const sim::EmaParams& p, const FitParameter& parameter);
+void set_parameter(sim::EmaParams& p, const FitParameter& parameter, double value);
+
+/// By name (fit_parameter_from_name), for discovery.cpp until it passes FitParameter: the name
+/// "term:K" of FitParameter::term(K), whether a name is one, and get/set_parameter by name.
+[[nodiscard]] bool is_term_parameter(const std::string& name);
+[[nodiscard]] std::string term_parameter(std::size_t index);
 [[nodiscard]] double get_parameter(const sim::EmaParams& p, const std::string& name);
 void set_parameter(sim::EmaParams& p, const std::string& name, double value);
 
