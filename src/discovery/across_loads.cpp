@@ -55,7 +55,7 @@ double term_start(const sim::Term& shape, const Run& run, const DiscoveryReport&
     sim::EmaParams p = base_model(r, shapes);
     p.eta_o = sim::EmaParams::datasheet().eta_o;
     p.eta_a = sim::eta_a_from_eta_o(p.eta_o, p.tau);
-    const RunSignals m = run_signals(resimulate(run, p));
+    const RunSignals m = resimulate_signals(resim_target(run), p);
     const std::vector<double> f = sensitivity(run, p, m, fit_parameter_name(FitParameter::fdj()));
     sim::Term unit = shape;
     unit.coefficient = 1.0;
@@ -214,7 +214,7 @@ AcrossLoads across_loads(const std::vector<const Run*>& runs, const std::vector<
     std::vector<std::vector<char>> masks;
     for (std::size_t i = 0; i < runs.size(); ++i) {
         signals.push_back(run_signals(*runs[i]));
-        masks.push_back(comparison_mask(signals[i], run_signals(resimulate(*runs[i], base_model(reports[i], seen)))));
+        masks.push_back(comparison_mask(signals[i], resimulate_signals(resim_target(*runs[i]), base_model(reports[i], seen))));
     }
     const LoadRuns lr{runs, reports, signals, masks, seen};
     for (const auto& shape : shapes) {

@@ -156,7 +156,7 @@ void refit_on_dyn(BreakawayAcross& out, const Run& dyn, const DiscoveryReport& d
     sim::EmaParams dyn_p = dyn_report.model.params;
     out.fdj_before_nm = dyn_p.fdj_nm;
     dyn_p.fsj_nm = std::max(out.fsj_nm, dyn_p.fdj_nm);
-    out.dyn_cost_before = trajectory_error(s, run_signals(resimulate(dyn, dyn_p)), dyn_report.floor).cost;
+    out.dyn_cost_before = trajectory_error(s, resimulate_signals(resim_target(dyn), dyn_p), dyn_report.floor).cost;
     auto refit = [&](const sim::EmaParams& start) {
         return fit_by_resimulation(dyn, s, start, names, no_mask, out.fsj_nm, kFitWindowSamples, nullptr, kMaxFitIterations,
                                    &dyn_report.floor);

@@ -69,7 +69,7 @@ void joint_screening(AcrossRunsReport& out, const std::vector<const Run*>& analy
         const Run& run = *analysed[i];
         const RunSignals s = run_signals(run);
         const sim::EmaParams& p = out.reports[i].model.params;
-        const RunSignals m = run_signals(resimulate(run, p));
+        const RunSignals m = resimulate_signals(resim_target(run), p);
         const std::vector<char> mask = comparison_mask(s, m);
         offsets.push_back(all.size());
         append(all, s, mask, all_mask);
@@ -98,7 +98,7 @@ void joint_screening(AcrossRunsReport& out, const std::vector<const Run*>& analy
         for (std::size_t i = 0; i < out.reports.size(); ++i) {
             sim::EmaParams q = out.reports[i].model.params;
             for (const auto& t : joint_terms) q.terms.push_back(t);
-            const RunSignals m = run_signals(resimulate(*analysed[i], q));
+            const RunSignals m = resimulate_signals(resim_target(*analysed[i]), q);
             const double b = trajectory_error(own[i], sims[i], out.reports[i].floor).cost;
             const double a = trajectory_error(own[i], m, out.reports[i].floor).cost;
             out.joint_cost_before.push_back(b);

@@ -5,6 +5,8 @@
 
 #include "core/emadiag_error.hpp"
 #include "core/sim_run.hpp"
+#include "estimation/number_text.hpp"
+#include "estimation/run_checks.hpp"
 
 #include <Eigen/Dense>
 
@@ -103,16 +105,49 @@ double rms(double sum_sq, std::size_t n) { return n ? std::sqrt(sum_sq / static_
 /// Threads for a batch of re-simulations (two cores is what a ramp laptop has).
 unsigned batch_threads() { return std::max(1u, std::min(2u, std::thread::hardware_concurrency())); }
 
-/// The re-simulated run of `c` and its result, checked as resimulate does.
-Run finish_resimulation(const Run& run, const sim::SimConfig& c, const sim::SimResult& r) {
+void check_resimulation(const ResimTarget& target, const sim::SimResult& r) {
     if (!r.finite) throw EmadiagError("discovery: the re-simulation diverged (NaN or inf)");
-    Run out = make_run(c, r);
-    out.constants = run.constants;
-    if (out.samples.size() != run.samples.size()) {
-        throw EmadiagError("discovery: the re-simulation has " + std::to_string(out.samples.size()) +
-                           " samples, the run " + std::to_string(run.samples.size()));
+    if (r.samples.size() != target.samples) {
+        throw EmadiagError("discovery: the re-simulation has " + std::to_string(r.samples.size()) +
+                           " samples, the run " + std::to_string(target.samples));
     }
+}
+
+/// The re-simulated run of `c` and its result, checked as resimulate does.
+Run finish_resimulation(const ResimTarget& target, const sim::SimConfig& c, const sim::SimResult& r) {
+    check_resimulation(target, r);
+    Run out = make_run(c, r);
+    out.constants = target.constants;
     return out;
+}
+
+/// The signals of a re-simulation: its samples with the measured run's constants (as
+/// finish_resimulation's Run, without its metadata and without checking it again).
+RunSignals finish_resimulation_signals(const ResimTarget& target, const sim::SimResult& r) {
+    check_resimulation(target, r);
+    Run bare;
+    bare.constants = target.constants;
+    bare.samples.reserve(r.samples.size());
+    for (const auto& x : r.samples) {
+        bare.samples.push_back(RunSample{x.t_s, x.current_a, x.speed_rad_s, x.theta_m_rad, x.hinge_moment_nm, x.command_deg});
+    }
+    return unchecked_run_signals(bare);
+}
+
+/// One sim::simulate_batch of every config on two threads when their params share the backlash
+/// (the lanes share it), else one simulation after another.
+std::vector<sim::SimResult> simulate_all(const std::vector<sim::SimConfig>& configs) {
+    bool shared_backlash = true;
+    for (const auto& c : configs) {
+        shared_backlash = shared_backlash && c.params.effects.backlash_rad == configs[0].params.effects.backlash_rad;
+    }
+    std::vector<sim::SimResult> results;
+    if (shared_backlash) {
+        results = sim::simulate_batch(configs, batch_threads());
+    } else {
+        for (const auto& c : configs) results.push_back(sim::simulate(c));
+    }
+    return results;
 }
 
 }  // namespace
@@ -190,42 +225,63 @@ void set_parameter(sim::EmaParams& p, const std::string& name, double value) {
     set_parameter(p, fit_parameter_from_name(name), value);
 }
 
-sim::SimConfig resim_config(const Run& run, const sim::EmaParams& params) {
+ResimTarget resim_target(const Run& run) {
+    const RunConstants& c = run.constants;
+    if (std::abs(sim::kSamplePeriodS - c.sample_period_s) > kSamplePeriodTolerance * c.sample_period_s) {
+        throw EmadiagError("discovery: the run's sample_period_s " + number_text(c.sample_period_s) +
+                           " s is not the simulator's " + number_text(sim::kSamplePeriodS) + " s (within " +
+                           number_text(100 * kSamplePeriodTolerance) + " %): the run cannot be re-simulated");
+    }
+    return ResimTarget{sim::parse_load_case(run.load_case), sim::parse_sequence(run.sequence), run.samples.size(), c};
+}
+
+sim::SimConfig resim_config(const ResimTarget& target, const sim::EmaParams& params) {
     sim::SimConfig c;
     c.params = params;
-    c.params.k_t_nm_per_a = run.constants.k_t_nm_per_a;
-    c.params.j_kgm2 = run.constants.j_kgm2;
-    c.params.tau = run.constants.tau;
-    c.load_case = sim::parse_load_case(run.load_case);
-    c.sequence = sim::parse_sequence(run.sequence);
+    c.params.k_t_nm_per_a = target.constants.k_t_nm_per_a;
+    c.params.j_kgm2 = target.constants.j_kgm2;
+    c.params.tau = target.constants.tau;
+    c.load_case = target.load_case;
+    c.sequence = target.sequence;
     c.noise = sim::NoiseProfile::None;
-    c.duration_s = static_cast<double>(run.samples.size()) * sim::kSamplePeriodS;
+    c.duration_s = static_cast<double>(target.samples) * sim::kSamplePeriodS;
     return c;
 }
 
+sim::SimConfig resim_config(const Run& run, const sim::EmaParams& params) { return resim_config(resim_target(run), params); }
+
 Run resimulate(const Run& run, const sim::EmaParams& params) {
-    const sim::SimConfig c = resim_config(run, params);
-    return finish_resimulation(run, c, sim::simulate(c));
+    const ResimTarget target = resim_target(run);
+    const sim::SimConfig c = resim_config(target, params);
+    return finish_resimulation(target, c, sim::simulate(c));
 }
 
 std::vector<Run> resimulate_many(const Run& run, const std::vector<sim::EmaParams>& params) {
     std::vector<Run> out;
     if (params.empty()) return out;
+    const ResimTarget target = resim_target(run);
     std::vector<sim::SimConfig> configs;
     configs.reserve(params.size());
-    bool shared_backlash = true;
-    for (const auto& p : params) {
-        configs.push_back(resim_config(run, p));
-        shared_backlash = shared_backlash && p.effects.backlash_rad == params[0].effects.backlash_rad;
-    }
-    std::vector<sim::SimResult> results;
-    if (shared_backlash) {
-        results = sim::simulate_batch(configs, batch_threads());
-    } else {
-        for (const auto& c : configs) results.push_back(sim::simulate(c));
-    }
+    for (const auto& p : params) configs.push_back(resim_config(target, p));
+    const std::vector<sim::SimResult> results = simulate_all(configs);
     out.reserve(params.size());
-    for (std::size_t i = 0; i < configs.size(); ++i) out.push_back(finish_resimulation(run, configs[i], results[i]));
+    for (std::size_t i = 0; i < configs.size(); ++i) out.push_back(finish_resimulation(target, configs[i], results[i]));
+    return out;
+}
+
+RunSignals resimulate_signals(const ResimTarget& target, const sim::EmaParams& params) {
+    return finish_resimulation_signals(target, sim::simulate(resim_config(target, params)));
+}
+
+std::vector<RunSignals> resimulate_signals_many(const ResimTarget& target, const std::vector<sim::EmaParams>& params) {
+    std::vector<RunSignals> out;
+    if (params.empty()) return out;
+    std::vector<sim::SimConfig> configs;
+    configs.reserve(params.size());
+    for (const auto& p : params) configs.push_back(resim_config(target, p));
+    const std::vector<sim::SimResult> results = simulate_all(configs);
+    out.reserve(params.size());
+    for (const auto& r : results) out.push_back(finish_resimulation_signals(target, r));
     return out;
 }
 
@@ -348,9 +404,9 @@ struct FitPoint {
 /// bit for bit), so the fit is the same, bit for bit, as trying one point after another.
 class FitEvaluator {
 public:
-    FitEvaluator(const Run& run, const std::vector<FitParameter>& parameters, double fsj_base_nm, const FitRows& rows,
-                 int& simulations)
-        : run_(run), parameters_(parameters), fsj_base_nm_(fsj_base_nm), rows_(rows), simulations_(simulations) {}
+    FitEvaluator(const ResimTarget& target, const std::vector<FitParameter>& parameters, double fsj_base_nm,
+                 const FitRows& rows, int& simulations)
+        : target_(target), parameters_(parameters), fsj_base_nm_(fsj_base_nm), rows_(rows), simulations_(simulations) {}
 
     [[nodiscard]] sim::EmaParams with_fsj(sim::EmaParams q) const {
         q.fsj_nm = std::max(fsj_base_nm_, q.fdj_nm);
@@ -379,24 +435,24 @@ public:
             }
         }
         if (extra != nullptr) batch.push_back(with_fsj(*extra));
-        const std::vector<Run> runs = resimulate_many(run_, batch);
+        std::vector<RunSignals> runs = resimulate_signals_many(target_, batch);
         simulations_ += static_cast<int>(runs.size());
         std::size_t k = 0;
         for (auto& pt : points) {
             if (pt.with_point) {
-                pt.signals = run_signals(runs[k++]);
+                pt.signals = std::move(runs[k++]);
                 pt.e = rows_.residual_of(pt.signals);
             }
             if (!pt.with_steps) continue;
             pt.stepped.clear();
-            for (Eigen::Index j = 0; j < np; ++j) pt.stepped.push_back(rows_.residual_of(run_signals(runs[k++])));
+            for (Eigen::Index j = 0; j < np; ++j) pt.stepped.push_back(rows_.residual_of(runs[k++]));
         }
-        if (extra != nullptr) *extra_e = rows_.residual_of(run_signals(runs[k]));
+        if (extra != nullptr) *extra_e = rows_.residual_of(runs[k]);
     }
     [[nodiscard]] const std::vector<FitParameter>& parameters() const { return parameters_; }
 
 private:
-    const Run& run_;
+    const ResimTarget& target_;
     const std::vector<FitParameter>& parameters_;
     double fsj_base_nm_;
     const FitRows& rows_;
@@ -508,7 +564,8 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
     const FitRows rows(measured, mask, window_samples, trajectory_floor);
     const Eigen::Index m = rows.count();
     const auto np = static_cast<Eigen::Index>(parameters.size());
-    const FitEvaluator ev(run, parameters, fsj_base_nm, rows, fr.simulations);
+    const ResimTarget target = resim_target(run);
+    const FitEvaluator ev(target, parameters, fsj_base_nm, rows, fr.simulations);
     fr.rows = static_cast<std::size_t>(m);
     std::vector<FitPoint> current(1);
     current[0].params = start;

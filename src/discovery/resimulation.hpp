@@ -39,8 +39,27 @@ struct ErrorMetrics {
     std::size_t torque_samples = 0;
 };
 
-/// The simulation of the run's case and sequence with `params`, noise none.
+/// What a re-simulation takes from the measured run, typed once: its case and sequence as the
+/// simulator's enums, its length and its constants (k_t, J, tau, sample period). The run must have
+/// been checked (run_signals); the re-simulation's samples are then not checked again.
+struct ResimTarget {
+    sim::LoadCase load_case = sim::LoadCase::B;
+    sim::Sequence sequence = sim::Sequence::Dyn;
+    std::size_t samples = 0;
+    RunConstants constants;
+};
+/// The run's ResimTarget. Throws EmadiagError when its sample period is not the simulator's (within
+/// kSamplePeriodTolerance of run_checks.hpp): the re-simulation would not line up with its samples.
+[[nodiscard]] ResimTarget resim_target(const Run& run);
+/// The simulation of the target's case and sequence with `params`, noise none.
+[[nodiscard]] sim::SimConfig resim_config(const ResimTarget& target, const sim::EmaParams& params);
 [[nodiscard]] sim::SimConfig resim_config(const Run& run, const sim::EmaParams& params);
+/// The signals of the re-simulation (run_signals of resimulate's Run, computed from the simulator's
+/// samples and the target's constants without a Run's metadata or a second check_run).
+[[nodiscard]] RunSignals resimulate_signals(const ResimTarget& target, const sim::EmaParams& params);
+/// resimulate_signals for each of `params` at once, as resimulate_many.
+[[nodiscard]] std::vector<RunSignals> resimulate_signals_many(const ResimTarget& target,
+                                                              const std::vector<sim::EmaParams>& params);
 /// The re-simulated run (make_run), with the measured run's constants so eq. 7 is the same.
 [[nodiscard]] Run resimulate(const Run& run, const sim::EmaParams& params);
 /// resimulate for each of `params` at once: one sim::simulate_batch on two threads, whose SIMD lanes
