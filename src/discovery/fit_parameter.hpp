@@ -3,15 +3,18 @@
 // follows it by eq. 4), an effect of sim::Effects that discovery fits, or the coefficient of one term
 // of EmaParams::terms by its index. fit_parameter_name is the one printer, for what reports and JSON
 // show: "fdj_nm", "eta_o", the sim::Effects name ("stribeck_amplitude"), "term:K".
+#include "emadiag/sim/ema_params.hpp"
+
 #include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace emadiag::discovery {
 
-/// The sim::Effects that discovery fits (resimulation.cpp holds each one's finite-difference step
+/// The sim::Effects that discovery fits (fit_parameter.cpp holds each one's finite-difference step
 /// and the range a fit keeps it in).
 enum class FittedEffect : std::uint8_t {
     Viscous,
@@ -67,5 +70,31 @@ private:
 [[nodiscard]] std::optional<FitParameter> find_fit_parameter(const std::string& name);
 /// find_fit_parameter; throws EmadiagError ("parameter 'x' cannot be fitted") for a name no fit takes.
 [[nodiscard]] FitParameter fit_parameter_from_name(const std::string& name);
+
+/// The range a fit keeps one parameter in (effects: inside sim::Effects::range, narrowed only where
+/// fit_parameter.cpp says why).
+struct FitRange {
+    double lo;
+    double hi;
+};
+[[nodiscard]] FitRange fit_range(const FitParameter& parameter);
+/// The same by name; throws on a parameter that cannot be fitted.
+[[nodiscard]] FitRange fit_range(const std::string& name);
+/// The smallest finite-difference step of a fit along the parameter (resimulation.cpp steps by a
+/// fraction of the value, at least this).
+[[nodiscard]] double fit_step_floor(const FitParameter& parameter);
+/// The effects (sim::Effects names) that discovery fits.
+[[nodiscard]] std::vector<std::string> fitted_effect_names();
+/// Reads / writes one fittable parameter of EmaParams (eta_o also sets eta_a by eq. 4; a value is kept
+/// inside fit_range). A term index beyond the model's terms throws EmadiagError.
+[[nodiscard]] double get_parameter(const sim::EmaParams& p, const FitParameter& parameter);
+void set_parameter(sim::EmaParams& p, const FitParameter& parameter, double value);
+
+/// By name (fit_parameter_from_name), for discovery.cpp until it passes FitParameter: the name
+/// "term:K" of FitParameter::term(K), whether a name is one, and get/set_parameter by name.
+[[nodiscard]] bool is_term_parameter(const std::string& name);
+[[nodiscard]] std::string term_parameter(std::size_t index);
+[[nodiscard]] double get_parameter(const sim::EmaParams& p, const std::string& name);
+void set_parameter(sim::EmaParams& p, const std::string& name, double value);
 
 }  // namespace emadiag::discovery

@@ -138,27 +138,4 @@ struct FitResult {
 [[nodiscard]] std::vector<double> trajectory_rows(const RunSignals& measured, const RunSignals& model,
                                                   const NoiseFloor& floor);
 
-/// The range a fit keeps one parameter in (effects: inside sim::Effects::range, narrowed only where
-/// resimulation.cpp says why).
-struct FitRange {
-    double lo;
-    double hi;
-};
-[[nodiscard]] FitRange fit_range(const FitParameter& parameter);
-/// The same by name; throws on a parameter that cannot be fitted.
-[[nodiscard]] FitRange fit_range(const std::string& name);
-/// The effects (sim::Effects names) that discovery fits.
-[[nodiscard]] std::vector<std::string> fitted_effect_names();
-/// Reads / writes one fittable parameter of EmaParams (eta_o also sets eta_a by eq. 4; a value is kept
-/// inside fit_range). A term index beyond the model's terms throws EmadiagError.
-[[nodiscard]] double get_parameter(const sim::EmaParams& p, const FitParameter& parameter);
-void set_parameter(sim::EmaParams& p, const FitParameter& parameter, double value);
-
-/// By name (fit_parameter_from_name), for discovery.cpp until it passes FitParameter: the name
-/// "term:K" of FitParameter::term(K), whether a name is one, and get/set_parameter by name.
-[[nodiscard]] bool is_term_parameter(const std::string& name);
-[[nodiscard]] std::string term_parameter(std::size_t index);
-[[nodiscard]] double get_parameter(const sim::EmaParams& p, const std::string& name);
-void set_parameter(sim::EmaParams& p, const std::string& name, double value);
-
 }  // namespace emadiag::discovery
