@@ -1,5 +1,6 @@
 #include "discovery/many_run/across_loads.hpp"
 
+#include "discovery/model/fit_parameter.hpp"
 #include "discovery/physics_names.hpp"
 #include "discovery/screening/screen_windows.hpp"
 #include "discovery/model/resimulation.hpp"
@@ -12,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <set>
 
 namespace emadiag::discovery {
@@ -53,8 +55,8 @@ double term_start(const sim::Term& shape, const Run& run, const DiscoveryReport&
     sim::EmaParams p = base_model(r, shapes);
     p.eta_o = sim::EmaParams::datasheet().eta_o;
     p.eta_a = sim::eta_a_from_eta_o(p.eta_o, p.tau);
-    const RunSignals m = run_signals(resimulate(run, p));
-    const std::vector<double> f = sensitivity(run, p, m, "fdj_nm");
+    const RunSignals m = resimulate_signals(resim_target(run), p);
+    const std::vector<double> f = sensitivity(run, p, m, fit_parameter_name(FitParameter::fdj()));
     sim::Term unit = shape;
     unit.coefficient = 1.0;
     const std::vector<double> x = term_signature(s, unit);
@@ -72,6 +74,104 @@ double term_start(const sim::Term& shape, const Run& run, const DiscoveryReport&
     const double det = ff * xx - fx * fx;
     if (!(det > 0)) return 0.0;
     return (ff * xr - fx * fr) / det;
+}
+
+/// What the load hypotheses are judged on: the runs with their reports, signals and comparison
+/// masks, and the bases of the hypotheses' shapes (base_model takes them out of each run's model).
+struct LoadRuns {
+    const std::vector<const Run*>& runs;
+    const std::vector<DiscoveryReport>& reports;
+    const std::vector<RunSignals>& signals;
+    const std::vector<std::vector<char>>& masks;
+    const std::set<std::string>& seen;
+};
+
+/// One hypothesis (`shape`, or nullopt: the efficiency) judged: 1. free on each run that identifies it,
+/// pooled; 2. the pooled value on every run, FDJ refitted. Nullopt when no run identifies it.
+std::optional<LoadHypothesis> judge_hypothesis(const std::optional<sim::Term>& shape, const LoadRuns& lr) {
+    const std::vector<const Run*>& runs = lr.runs;
+    const std::vector<DiscoveryReport>& reports = lr.reports;
+    const std::vector<RunSignals>& signals = lr.signals;
+    const std::vector<std::vector<char>>& masks = lr.masks;
+    const std::set<std::string>& seen = lr.seen;
+    const double eta_ds = sim::EmaParams::datasheet().eta_o;
+    LoadHypothesis h;
+    if (shape) {
+        const PhysicsName n = physics_name(*shape);
+        h.key = n.key;
+        h.text = n.text;
+        h.parameter = shape->basis_text();
+    } else {
+        h.key = "efficiency";
+        h.text = "eta_O off the datasheet (one efficiency for every run)";
+        h.parameter = "eta_O";
+    }
+    // The start of run i under this hypothesis, and the name of its parameter.
+    auto start_of = [&](std::size_t i, double value) {
+        sim::EmaParams p = base_model(reports[i], seen);
+        if (shape) {
+            p.eta_o = eta_ds;
+            sim::Term t = *shape;
+            t.coefficient = value;
+            p.terms.push_back(t);
+        } else {
+            p.eta_o = value;
+        }
+        p.eta_a = sim::eta_a_from_eta_o(p.eta_o, p.tau);
+        return p;
+    };
+    // Fitted on the torque residual (window sums over the comparison samples, as the single run's
+    // efficiency stage does: its standard errors are those of nearly independent rows), judged on
+    // the trajectory.
+    auto fit = [&](std::size_t i, const sim::EmaParams& start, const std::vector<FitParameter>& names) {
+        return fit_by_resimulation(*runs[i], signals[i], start, names, masks[i], start.fsj_nm, kFitWindowSamples, nullptr,
+                                   kLoadFitIterations);
+    };
+    // 1. Free on each run that identifies it.
+    double sw = 0, swv = 0;
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+        double v = std::numeric_limits<double>::quiet_NaN(), se = v;
+        const bool free = shape ? true : eta_identified(reports[i]);
+        if (free) {
+            const double v0 = shape ? term_start(*shape, *runs[i], reports[i], seen, signals[i], masks[i])
+                                    : (reports[i].efficiency.ran ? reports[i].efficiency.eta_o : base_model(reports[i], seen).eta_o);
+            const sim::EmaParams start = start_of(i, v0);
+            const FitParameter name = shape ? FitParameter::term(start.terms.size() - 1) : FitParameter::eta_o();
+            const FitResult f = fit(i, start, {FitParameter::fdj(), name});
+            for (const auto& fv : f.values) {
+                if (fv.parameter == name) {
+                    v = fv.value;
+                    se = fv.std_error;
+                }
+            }
+            if (std::isfinite(v) && se > 0) {
+                sw += 1.0 / (se * se);
+                swv += v / (se * se);
+            }
+        }
+        h.values.push_back(v);
+        h.std_errors.push_back(se);
+    }
+    if (sw <= 0) return std::nullopt;  // no run identifies it
+    h.pooled = swv / sw;
+    h.pooled_se = std::sqrt(1.0 / sw);
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+        if (std::isfinite(h.values[i]) && h.std_errors[i] > 0) {
+            h.chi2 += std::pow((h.values[i] - h.pooled) / h.std_errors[i], 2);
+            ++h.dof;
+        }
+    }
+    h.dof = h.dof > 0 ? h.dof - 1 : 0;
+    h.consistent = h.dof == 0 || h.chi2 <= chi2_upper(h.dof);
+    // 2. The pooled value on every run, FDJ refitted.
+    double sum = 0;
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+        const FitResult f = fit(i, start_of(i, h.pooled), {FitParameter::fdj()});
+        h.costs.push_back(trajectory_error(signals[i], f.signals, reports[i].floor).cost);
+        sum += h.costs.back();
+    }
+    h.mean_cost = sum / static_cast<double>(runs.size());
+    return h;
 }
 
 }  // namespace
@@ -98,7 +198,6 @@ AcrossLoads across_loads(const std::vector<const Run*>& runs, const std::vector<
     out.ran = true;
     // The hypotheses: the efficiency, each single-term friction a run's efficiency stage found, and
     // the two that load and deflection stand for: friction ~ sgn(w) |F_R| and ~ sgn(w) |theta_u|.
-    const double eta_ds = sim::EmaParams::datasheet().eta_o;
     std::vector<std::optional<sim::Term>> shapes = {std::nullopt};  // nullopt: the efficiency
     std::set<std::string> seen;
     auto add_shape = [&](sim::Term t) {
@@ -115,86 +214,11 @@ AcrossLoads across_loads(const std::vector<const Run*>& runs, const std::vector<
     std::vector<std::vector<char>> masks;
     for (std::size_t i = 0; i < runs.size(); ++i) {
         signals.push_back(run_signals(*runs[i]));
-        masks.push_back(comparison_mask(signals[i], run_signals(resimulate(*runs[i], base_model(reports[i], seen)))));
+        masks.push_back(comparison_mask(signals[i], resimulate_signals(resim_target(*runs[i]), base_model(reports[i], seen))));
     }
+    const LoadRuns lr{runs, reports, signals, masks, seen};
     for (const auto& shape : shapes) {
-        LoadHypothesis h;
-        if (shape) {
-            const PhysicsName n = physics_name(*shape);
-            h.key = n.key;
-            h.text = n.text;
-            h.parameter = shape->basis_text();
-        } else {
-            h.key = "efficiency";
-            h.text = "eta_O off the datasheet (one efficiency for every run)";
-            h.parameter = "eta_O";
-        }
-        // The start of run i under this hypothesis, and the name of its parameter.
-        auto start_of = [&](std::size_t i, double value) {
-            sim::EmaParams p = base_model(reports[i], seen);
-            if (shape) {
-                p.eta_o = eta_ds;
-                sim::Term t = *shape;
-                t.coefficient = value;
-                p.terms.push_back(t);
-            } else {
-                p.eta_o = value;
-            }
-            p.eta_a = sim::eta_a_from_eta_o(p.eta_o, p.tau);
-            return p;
-        };
-        // Fitted on the torque residual (window sums over the comparison samples, as the single run's
-        // efficiency stage does: its standard errors are those of nearly independent rows), judged on
-        // the trajectory.
-        auto fit = [&](std::size_t i, const sim::EmaParams& start, const std::vector<std::string>& names) {
-            return fit_by_resimulation(*runs[i], signals[i], start, names, masks[i], start.fsj_nm, kFitWindowSamples, nullptr,
-                                       kLoadFitIterations);
-        };
-        // 1. Free on each run that identifies it.
-        double sw = 0, swv = 0;
-        for (std::size_t i = 0; i < runs.size(); ++i) {
-            double v = std::numeric_limits<double>::quiet_NaN(), se = v;
-            const bool free = shape ? true : eta_identified(reports[i]);
-            if (free) {
-                const double v0 = shape ? term_start(*shape, *runs[i], reports[i], seen, signals[i], masks[i])
-                                        : (reports[i].efficiency.ran ? reports[i].efficiency.eta_o : base_model(reports[i], seen).eta_o);
-                const sim::EmaParams start = start_of(i, v0);
-                const std::string name = shape ? term_parameter(start.terms.size() - 1) : "eta_o";
-                const FitResult f = fit(i, start, {"fdj_nm", name});
-                for (const auto& fv : f.values) {
-                    if (fv.name == name) {
-                        v = fv.value;
-                        se = fv.std_error;
-                    }
-                }
-                if (std::isfinite(v) && se > 0) {
-                    sw += 1.0 / (se * se);
-                    swv += v / (se * se);
-                }
-            }
-            h.values.push_back(v);
-            h.std_errors.push_back(se);
-        }
-        if (sw <= 0) continue;  // no run identifies it
-        h.pooled = swv / sw;
-        h.pooled_se = std::sqrt(1.0 / sw);
-        for (std::size_t i = 0; i < runs.size(); ++i) {
-            if (std::isfinite(h.values[i]) && h.std_errors[i] > 0) {
-                h.chi2 += std::pow((h.values[i] - h.pooled) / h.std_errors[i], 2);
-                ++h.dof;
-            }
-        }
-        h.dof = h.dof > 0 ? h.dof - 1 : 0;
-        h.consistent = h.dof == 0 || h.chi2 <= chi2_upper(h.dof);
-        // 2. The pooled value on every run, FDJ refitted.
-        double sum = 0;
-        for (std::size_t i = 0; i < runs.size(); ++i) {
-            const FitResult f = fit(i, start_of(i, h.pooled), {"fdj_nm"});
-            h.costs.push_back(trajectory_error(signals[i], f.signals, reports[i].floor).cost);
-            sum += h.costs.back();
-        }
-        h.mean_cost = sum / static_cast<double>(runs.size());
-        out.hypotheses.push_back(h);
+        if (auto h = judge_hypothesis(shape, lr)) out.hypotheses.push_back(std::move(*h));
     }
     // Ranked by the mean cost at the pooled value, which is what one actuator must satisfy; the
     // chi-square of the per-run values is reported beside it.

@@ -3,6 +3,7 @@
 #include "core/emadiag_error.hpp"
 #include "discovery/many_run/across_loads.hpp"
 #include "discovery/many_run/breakaway_across.hpp"
+#include "discovery/model/fit_parameter.hpp"
 #include "discovery/physics_names.hpp"
 #include "discovery/screening/screen_windows.hpp"
 #include "estimation/health_estimate.hpp"
@@ -46,7 +47,7 @@ bool step_value(const DiscoveryStep& st, std::string& parameter, double& value, 
         return true;
     }
     for (const auto& f : st.fitted) {
-        if (f.name != "fdj_nm" && f.name != "eta_o") {
+        if (!f.parameter.is_health()) {
             parameter = f.name;
             value = f.value;
             se = f.std_error;
@@ -54,6 +55,112 @@ bool step_value(const DiscoveryStep& st, std::string& parameter, double& value, 
         }
     }
     return false;
+}
+
+/// 2. Joint screening of what each run's own model leaves (`analysed[i]` the run of out.reports[i]),
+/// and the confirmation of an accepted block on every run's own model.
+void joint_screening(AcrossRunsReport& out, const std::vector<const Run*>& analysed) {
+    RunSignals all;
+    std::vector<char> all_mask;
+    ScreenInput in;
+    std::vector<std::size_t> offsets;
+    std::vector<RunSignals> own, sims;
+    for (std::size_t i = 0; i < out.reports.size(); ++i) {
+        const Run& run = *analysed[i];
+        const RunSignals s = run_signals(run);
+        const sim::EmaParams& p = out.reports[i].model.params;
+        const RunSignals m = resimulate_signals(resim_target(run), p);
+        const std::vector<char> mask = comparison_mask(s, m);
+        offsets.push_back(all.size());
+        append(all, s, mask, all_mask);
+        for (std::size_t k = 0; k < s.size(); ++k) in.residual_nm.push_back(s.residual_torque_nm[k] - m.residual_torque_nm[k]);
+        std::vector<FitParameter> names = {FitParameter::fdj()};
+        for (const auto& h : out.reports[i].model.health) {
+            if (h.name == kParamEtaO && (h.source == "estimated" || h.source == "refit")) names.push_back(FitParameter::eta_o());
+        }
+        for (const auto& name : names) {
+            std::vector<double> col(offsets.back(), 0.0);
+            const auto c = sensitivity(run, p, m, fit_parameter_name(name));
+            col.insert(col.end(), c.begin(), c.end());
+            in.base_columns.push_back(col);
+        }
+        own.push_back(s);
+        sims.push_back(m);
+    }
+    for (auto& c : in.base_columns) c.resize(all.size(), 0.0);
+    in.mask = all_mask;
+    out.joint = screen_generated(all, in, generated_library(all));
+    if (!out.joint.ranking.empty() && out.joint.ranking.front().accepted) {
+        // A periodic block's period refined as for one run (on the stacked residual).
+        const std::vector<sim::Term> joint_terms = refine_period(all, in, out.joint.ranking.front(), 1);
+        // Confirmation: the joint terms added to every run's own model, re-simulated.
+        double before = 0, after = 0;
+        for (std::size_t i = 0; i < out.reports.size(); ++i) {
+            sim::EmaParams q = out.reports[i].model.params;
+            for (const auto& t : joint_terms) q.terms.push_back(t);
+            const RunSignals m = resimulate_signals(resim_target(*analysed[i]), q);
+            const double b = trajectory_error(own[i], sims[i], out.reports[i].floor).cost;
+            const double a = trajectory_error(own[i], m, out.reports[i].floor).cost;
+            out.joint_cost_before.push_back(b);
+            out.joint_cost_after.push_back(a);
+            before += b;
+            after += a;
+        }
+        out.joint_confirmed = after < before;
+        if (out.joint_confirmed) {
+            out.joint_terms = joint_terms;
+            const PhysicsName n = physics_name(joint_terms.front());
+            out.joint_key = n.key;
+            out.joint_text = n.text;
+        }
+    }
+}
+
+/// 3. The effects found in two runs or more, compared across the runs.
+void compare_effects(AcrossRunsReport& out) {
+    std::map<std::string, AcrossRunsEffect> by_key;
+    std::vector<std::string> order;
+    for (std::size_t i = 0; i < out.reports.size(); ++i) {
+        for (const auto& st : out.reports[i].steps) {
+            if (!st.added && st.added_terms.empty()) continue;
+            std::string parameter;
+            double v = 0, se = 0;
+            if (!step_value(st, parameter, v, se)) continue;
+            auto& e = by_key[st.name_key + "|" + parameter];
+            if (e.key.empty()) order.push_back(st.name_key + "|" + parameter);
+            e.key = st.name_key;
+            e.text = st.name_text;
+            e.parameter = parameter;
+            e.runs.push_back(i);
+            e.values.push_back(v);
+            e.std_errors.push_back(std::max(se, 1e-300));
+        }
+    }
+    for (const auto& k : order) {
+        AcrossRunsEffect e = by_key[k];
+        if (e.runs.size() < 2) continue;
+        double sw = 0, swv = 0, swx = 0, swxx = 0, swxv = 0;
+        for (std::size_t j = 0; j < e.runs.size(); ++j) {
+            const double w = 1.0 / (e.std_errors[j] * e.std_errors[j]);
+            const double x = static_cast<double>(e.runs[j]);
+            sw += w;
+            swv += w * e.values[j];
+            swx += w * x;
+            swxx += w * x * x;
+            swxv += w * x * e.values[j];
+        }
+        e.mean = swv / sw;
+        for (std::size_t j = 0; j < e.runs.size(); ++j) e.chi2 += std::pow((e.values[j] - e.mean) / e.std_errors[j], 2);
+        const double det = sw * swxx - swx * swx;
+        if (det > 0) {
+            e.slope_per_run = (sw * swxv - swx * swv) / det;
+            e.slope_se = std::sqrt(sw / det);
+        }
+        const double dof = static_cast<double>(e.runs.size() - 1);
+        const double z = (e.chi2 - dof) / std::sqrt(2.0 * dof);
+        e.changes = z > kStructureMinZ / 2 && e.slope_se > 0 && std::abs(e.slope_per_run) > 3.0 * e.slope_se;
+        out.effects.push_back(e);
+    }
 }
 
 }  // namespace
@@ -112,108 +219,10 @@ AcrossRunsReport discover_runs(const std::vector<Run>& runs, const std::vector<s
         throw EmadiagError("discovery: none of the " + std::to_string(runs.size()) + " runs can be analysed:" + why);
     }
     // 2. Joint screening of what each run's own model leaves (needs two runs or more).
-    if (out.reports.size() >= 2 && options.open_world) {
-        RunSignals all;
-        std::vector<char> all_mask;
-        ScreenInput in;
-        std::vector<std::size_t> offsets;
-        std::vector<RunSignals> own, sims;
-        for (std::size_t i = 0; i < out.reports.size(); ++i) {
-            const Run& run = *analysed[i];
-            const RunSignals s = run_signals(run);
-            const sim::EmaParams& p = out.reports[i].model.params;
-            const RunSignals m = run_signals(resimulate(run, p));
-            const std::vector<char> mask = comparison_mask(s, m);
-            offsets.push_back(all.size());
-            append(all, s, mask, all_mask);
-            for (std::size_t k = 0; k < s.size(); ++k) in.residual_nm.push_back(s.residual_torque_nm[k] - m.residual_torque_nm[k]);
-            std::vector<std::string> names = {"fdj_nm"};
-            for (const auto& h : out.reports[i].model.health) {
-                if (h.name == kParamEtaO && (h.source == "estimated" || h.source == "refit")) names.push_back("eta_o");
-            }
-            for (const auto& name : names) {
-                std::vector<double> col(offsets.back(), 0.0);
-                const auto c = sensitivity(run, p, m, name);
-                col.insert(col.end(), c.begin(), c.end());
-                in.base_columns.push_back(col);
-            }
-            own.push_back(s);
-            sims.push_back(m);
-        }
-        for (auto& c : in.base_columns) c.resize(all.size(), 0.0);
-        in.mask = all_mask;
-        out.joint = screen_generated(all, in, generated_library(all));
-        if (!out.joint.ranking.empty() && out.joint.ranking.front().accepted) {
-            // A periodic block's period refined as for one run (on the stacked residual).
-            const std::vector<sim::Term> joint_terms = refine_period(all, in, out.joint.ranking.front(), 1);
-            // Confirmation: the joint terms added to every run's own model, re-simulated.
-            double before = 0, after = 0;
-            for (std::size_t i = 0; i < out.reports.size(); ++i) {
-                sim::EmaParams q = out.reports[i].model.params;
-                for (const auto& t : joint_terms) q.terms.push_back(t);
-                const RunSignals m = run_signals(resimulate(*analysed[i], q));
-                const double b = trajectory_error(own[i], sims[i], out.reports[i].floor).cost;
-                const double a = trajectory_error(own[i], m, out.reports[i].floor).cost;
-                out.joint_cost_before.push_back(b);
-                out.joint_cost_after.push_back(a);
-                before += b;
-                after += a;
-            }
-            out.joint_confirmed = after < before;
-            if (out.joint_confirmed) {
-                out.joint_terms = joint_terms;
-                const PhysicsName n = physics_name(joint_terms.front());
-                out.joint_key = n.key;
-                out.joint_text = n.text;
-            }
-        }
-    }
+    if (out.reports.size() >= 2 && options.open_world) joint_screening(out, analysed);
     // Across load cases: an efficiency change or a friction that follows the load on one run.
     if (options.open_world && out.reports.size() >= 2) out.loads = across_loads(analysed, out.labels, out.reports);
-    // 3. The effects found in two runs or more, compared across the runs.
-    std::map<std::string, AcrossRunsEffect> by_key;
-    std::vector<std::string> order;
-    for (std::size_t i = 0; i < out.reports.size(); ++i) {
-        for (const auto& st : out.reports[i].steps) {
-            if (!st.added && st.added_terms.empty()) continue;
-            std::string parameter;
-            double v = 0, se = 0;
-            if (!step_value(st, parameter, v, se)) continue;
-            auto& e = by_key[st.name_key + "|" + parameter];
-            if (e.key.empty()) order.push_back(st.name_key + "|" + parameter);
-            e.key = st.name_key;
-            e.text = st.name_text;
-            e.parameter = parameter;
-            e.runs.push_back(i);
-            e.values.push_back(v);
-            e.std_errors.push_back(std::max(se, 1e-300));
-        }
-    }
-    for (const auto& k : order) {
-        AcrossRunsEffect e = by_key[k];
-        if (e.runs.size() < 2) continue;
-        double sw = 0, swv = 0, swx = 0, swxx = 0, swxv = 0;
-        for (std::size_t j = 0; j < e.runs.size(); ++j) {
-            const double w = 1.0 / (e.std_errors[j] * e.std_errors[j]);
-            const double x = static_cast<double>(e.runs[j]);
-            sw += w;
-            swv += w * e.values[j];
-            swx += w * x;
-            swxx += w * x * x;
-            swxv += w * x * e.values[j];
-        }
-        e.mean = swv / sw;
-        for (std::size_t j = 0; j < e.runs.size(); ++j) e.chi2 += std::pow((e.values[j] - e.mean) / e.std_errors[j], 2);
-        const double det = sw * swxx - swx * swx;
-        if (det > 0) {
-            e.slope_per_run = (sw * swxv - swx * swv) / det;
-            e.slope_se = std::sqrt(sw / det);
-        }
-        const double dof = static_cast<double>(e.runs.size() - 1);
-        const double z = (e.chi2 - dof) / std::sqrt(2.0 * dof);
-        e.changes = z > kStructureMinZ / 2 && e.slope_se > 0 && std::abs(e.slope_per_run) > 3.0 * e.slope_se;
-        out.effects.push_back(e);
-    }
+    compare_effects(out);
     return out;
 }
 

@@ -1,89 +1,32 @@
-// GCC 12 reports false -Wmaybe-uninitialized inside Eigen's AVX-512 kernels (matrix-vector product).
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#pragma GCC diagnostic ignored "-Wuninitialized"
 #include "discovery/model/resimulation.hpp"
 
 #include "core/emadiag_error.hpp"
 #include "core/sim_run.hpp"
+#include "estimation/number_text.hpp"
+#include "estimation/run_checks.hpp"
 
 #include <Eigen/Dense>
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
+#include <optional>
 #include <thread>
 #include <utility>
 
 namespace emadiag::discovery {
 namespace {
 
-/// Range and finite-difference step of each fittable parameter.
-struct ParamSpec {
-    std::string name;
-    double lo, hi;
-    double step_abs;  ///< finite-difference step floor
-};
-
-/// An effect fitted by discovery: its finite-difference step floor and, where the fit must stay
-/// inside the simulator's range (sim::Effects::range, the one definition), the lower end and why.
-struct EffectFit {
-    const char* name;
-    double step_abs;
-    double fit_lo;  ///< NaN: the simulator's lower end
-};
-constexpr double kSimulatorLo = std::numeric_limits<double>::quiet_NaN();
-constexpr EffectFit kEffectFits[] = {
-    {"viscous", 1e-7, kSimulatorLo},
-    {"stribeck_amplitude", 2e-3, kSimulatorLo},
-    // the simulator takes 1e-6 rad/s; a fit starts at its 1 rad/s step, so a step never leaves the range
-    {"stribeck_speed", 1.0, 1.0},
-    {"spall_amplitude", 2e-3, kSimulatorLo},
-    {"spall_center", 0.02, kSimulatorLo},
-    // the simulator takes 1e-6 deg; a fit keeps 2.5 of its 0.02 deg steps above zero
-    {"spall_width", 0.02, 0.05},
-    {"ripple_amplitude", 2e-3, kSimulatorLo},
-    {"current_gain_error", 2e-4, kSimulatorLo},
-    {"hinge_offset", 0.5, kSimulatorLo},
-    // the simulator reads 0 as "the datasheet J"; a fitted inertia is one step above it
-    {"true_inertia", 1e-7, 1e-7},
-};
-
-const std::vector<ParamSpec>& specs() {
-    static const std::vector<ParamSpec> all = [] {
-        std::vector<ParamSpec> v = {
-            {"fdj_nm", 0.0, 10.0, 2e-4},
-            {"eta_o", 0.3, 0.9999, 2e-3},  // below 1: eq. (4) gives eta_A = 1 at eta_O = 1, outside the simulator range
-        };
-        for (const auto& e : kEffectFits) {
-            const sim::Effects::Range r = sim::Effects::range(e.name);
-            v.push_back({e.name, std::isnan(e.fit_lo) ? r.min : e.fit_lo, r.max, e.step_abs});
-        }
-        return v;
-    }();
-    return all;
-}
-/// Relative finite-difference step (the simulator's chatter makes smaller steps noisy).
+/// Relative finite-difference step (the simulator's chatter makes smaller steps noisy); at least
+/// fit_step_floor of the parameter.
 constexpr double kStepRel = 0.005;
 
-/// Coefficients of sim::Term entries are named "term:K" (K the index in EmaParams::terms): any
-/// value; the step is relative (kStepRel) with this floor.
-const ParamSpec kTermSpec = {"term", -1e12, 1e12, 1e-12};
-
-std::size_t term_index(const std::string& name, const sim::EmaParams& p) {
-    const std::size_t k = std::stoul(name.substr(5));
-    if (k >= p.terms.size()) {
-        throw EmadiagError("discovery: parameter '" + name + "': the model has " + std::to_string(p.terms.size()) +
-                           " terms");
-    }
-    return k;
-}
-
-const ParamSpec& spec(const std::string& name) {
-    if (is_term_parameter(name)) return kTermSpec;
-    for (const auto& s : specs()) {
-        if (name == s.name) return s;
-    }
-    throw EmadiagError("discovery: parameter '" + name + "' cannot be fitted");
+std::vector<FitParameter> parameters_from_names(const std::vector<std::string>& names) {
+    std::vector<FitParameter> out;
+    out.reserve(names.size());
+    for (const auto& n : names) out.push_back(fit_parameter_from_name(n));
+    return out;
 }
 
 double rms(double sum_sq, std::size_t n) { return n ? std::sqrt(sum_sq / static_cast<double>(n)) : 0.0; }
@@ -91,16 +34,49 @@ double rms(double sum_sq, std::size_t n) { return n ? std::sqrt(sum_sq / static_
 /// Threads for a batch of re-simulations (two cores is what a ramp laptop has).
 unsigned batch_threads() { return std::max(1u, std::min(2u, std::thread::hardware_concurrency())); }
 
-/// The re-simulated run of `c` and its result, checked as resimulate does.
-Run finish_resimulation(const Run& run, const sim::SimConfig& c, const sim::SimResult& r) {
+void check_resimulation(const ResimTarget& target, const sim::SimResult& r) {
     if (!r.finite) throw EmadiagError("discovery: the re-simulation diverged (NaN or inf)");
-    Run out = make_run(c, r);
-    out.constants = run.constants;
-    if (out.samples.size() != run.samples.size()) {
-        throw EmadiagError("discovery: the re-simulation has " + std::to_string(out.samples.size()) +
-                           " samples, the run " + std::to_string(run.samples.size()));
+    if (r.samples.size() != target.samples) {
+        throw EmadiagError("discovery: the re-simulation has " + std::to_string(r.samples.size()) +
+                           " samples, the run " + std::to_string(target.samples));
     }
+}
+
+/// The re-simulated run of `c` and its result, checked as resimulate does.
+Run finish_resimulation(const ResimTarget& target, const sim::SimConfig& c, const sim::SimResult& r) {
+    check_resimulation(target, r);
+    Run out = make_run(c, r);
+    out.constants = target.constants;
     return out;
+}
+
+/// The signals of a re-simulation: its samples with the measured run's constants (as
+/// finish_resimulation's Run, without its metadata and without checking it again).
+RunSignals finish_resimulation_signals(const ResimTarget& target, const sim::SimResult& r) {
+    check_resimulation(target, r);
+    Run bare;
+    bare.constants = target.constants;
+    bare.samples.reserve(r.samples.size());
+    for (const auto& x : r.samples) {
+        bare.samples.push_back(RunSample{x.t_s, x.current_a, x.speed_rad_s, x.theta_m_rad, x.hinge_moment_nm, x.command_deg});
+    }
+    return unchecked_run_signals(bare);
+}
+
+/// One sim::simulate_batch of every config on two threads when their params share the backlash
+/// (the lanes share it), else one simulation after another.
+std::vector<sim::SimResult> simulate_all(const std::vector<sim::SimConfig>& configs) {
+    bool shared_backlash = true;
+    for (const auto& c : configs) {
+        shared_backlash = shared_backlash && c.params.effects.backlash_rad == configs[0].params.effects.backlash_rad;
+    }
+    std::vector<sim::SimResult> results;
+    if (shared_backlash) {
+        results = sim::simulate_batch(configs, batch_threads());
+    } else {
+        for (const auto& c : configs) results.push_back(sim::simulate(c));
+    }
+    return results;
 }
 
 }  // namespace
@@ -123,84 +99,63 @@ std::vector<double> trajectory_rows(const RunSignals& a, const RunSignals& b, co
     return rows;
 }
 
-bool is_term_parameter(const std::string& name) {
-    return name.size() > 5 && name.compare(0, 5, "term:") == 0 &&
-           name.find_first_not_of("0123456789", 5) == std::string::npos;
-}
-
-FitRange fit_range(const std::string& name) {
-    const ParamSpec& s = spec(name);
-    return {s.lo, s.hi};
-}
-
-std::vector<std::string> fitted_effect_names() {
-    std::vector<std::string> v;
-    for (const auto& e : kEffectFits) v.emplace_back(e.name);
-    return v;
-}
-
-std::string term_parameter(std::size_t index) { return "term:" + std::to_string(index); }
-
-double get_parameter(const sim::EmaParams& p, const std::string& name) {
-    if (is_term_parameter(name)) return p.terms[term_index(name, p)].coefficient;
-    if (name == "fdj_nm") return p.fdj_nm;
-    if (name == "eta_o") return p.eta_o;
-    (void)spec(name);
-    return p.effects.get(name);
-}
-
-void set_parameter(sim::EmaParams& p, const std::string& name, double value) {
-    const ParamSpec& s = spec(name);
-    value = std::clamp(value, s.lo, s.hi);
-    if (is_term_parameter(name)) {
-        p.terms[term_index(name, p)].coefficient = value;
-    } else if (name == "fdj_nm") {
-        p.fdj_nm = value;
-        p.fsj_nm = std::max(p.fsj_nm, p.fdj_nm);
-    } else if (name == "eta_o") {
-        p.eta_o = value;
-        p.eta_a = sim::eta_a_from_eta_o(value, p.tau);
-    } else {
-        p.effects.set(name, value);
+ResimTarget resim_target(const Run& run) {
+    const RunConstants& c = run.constants;
+    if (std::abs(sim::kSamplePeriodS - c.sample_period_s) > kSamplePeriodTolerance * c.sample_period_s) {
+        throw EmadiagError("discovery: the run's sample_period_s " + number_text(c.sample_period_s) +
+                           " s is not the simulator's " + number_text(sim::kSamplePeriodS) + " s (within " +
+                           number_text(100 * kSamplePeriodTolerance) + " %): the run cannot be re-simulated");
     }
+    return ResimTarget{sim::parse_load_case(run.load_case), sim::parse_sequence(run.sequence), run.samples.size(), c};
 }
 
-sim::SimConfig resim_config(const Run& run, const sim::EmaParams& params) {
+sim::SimConfig resim_config(const ResimTarget& target, const sim::EmaParams& params) {
     sim::SimConfig c;
     c.params = params;
-    c.params.k_t_nm_per_a = run.constants.k_t_nm_per_a;
-    c.params.j_kgm2 = run.constants.j_kgm2;
-    c.params.tau = run.constants.tau;
-    c.load_case = sim::parse_load_case(run.load_case);
-    c.sequence = sim::parse_sequence(run.sequence);
+    c.params.k_t_nm_per_a = target.constants.k_t_nm_per_a;
+    c.params.j_kgm2 = target.constants.j_kgm2;
+    c.params.tau = target.constants.tau;
+    c.load_case = target.load_case;
+    c.sequence = target.sequence;
     c.noise = sim::NoiseProfile::None;
-    c.duration_s = static_cast<double>(run.samples.size()) * sim::kSamplePeriodS;
+    c.duration_s = static_cast<double>(target.samples) * sim::kSamplePeriodS;
     return c;
 }
 
+sim::SimConfig resim_config(const Run& run, const sim::EmaParams& params) { return resim_config(resim_target(run), params); }
+
 Run resimulate(const Run& run, const sim::EmaParams& params) {
-    const sim::SimConfig c = resim_config(run, params);
-    return finish_resimulation(run, c, sim::simulate(c));
+    const ResimTarget target = resim_target(run);
+    const sim::SimConfig c = resim_config(target, params);
+    return finish_resimulation(target, c, sim::simulate(c));
 }
 
 std::vector<Run> resimulate_many(const Run& run, const std::vector<sim::EmaParams>& params) {
     std::vector<Run> out;
     if (params.empty()) return out;
+    const ResimTarget target = resim_target(run);
     std::vector<sim::SimConfig> configs;
     configs.reserve(params.size());
-    bool shared_backlash = true;
-    for (const auto& p : params) {
-        configs.push_back(resim_config(run, p));
-        shared_backlash = shared_backlash && p.effects.backlash_rad == params[0].effects.backlash_rad;
-    }
-    std::vector<sim::SimResult> results;
-    if (shared_backlash) {
-        results = sim::simulate_batch(configs, batch_threads());
-    } else {
-        for (const auto& c : configs) results.push_back(sim::simulate(c));
-    }
+    for (const auto& p : params) configs.push_back(resim_config(target, p));
+    const std::vector<sim::SimResult> results = simulate_all(configs);
     out.reserve(params.size());
-    for (std::size_t i = 0; i < configs.size(); ++i) out.push_back(finish_resimulation(run, configs[i], results[i]));
+    for (std::size_t i = 0; i < configs.size(); ++i) out.push_back(finish_resimulation(target, configs[i], results[i]));
+    return out;
+}
+
+RunSignals resimulate_signals(const ResimTarget& target, const sim::EmaParams& params) {
+    return finish_resimulation_signals(target, sim::simulate(resim_config(target, params)));
+}
+
+std::vector<RunSignals> resimulate_signals_many(const ResimTarget& target, const std::vector<sim::EmaParams>& params) {
+    std::vector<RunSignals> out;
+    if (params.empty()) return out;
+    std::vector<sim::SimConfig> configs;
+    configs.reserve(params.size());
+    for (const auto& p : params) configs.push_back(resim_config(target, p));
+    const std::vector<sim::SimResult> results = simulate_all(configs);
+    out.reserve(params.size());
+    for (const auto& r : results) out.push_back(finish_resimulation_signals(target, r));
     return out;
 }
 
@@ -258,64 +213,83 @@ ErrorMetrics model_error(const RunSignals& a, const RunSignals& b, const std::ve
     return e;
 }
 
-FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
-                              const std::vector<std::string>& names, const std::vector<char>& mask,
-                              double fsj_base_nm, std::size_t window_samples, const sim::EmaParams* reference,
-                              int max_iterations, const NoiseFloor* trajectory_floor) {
-    FitResult fr;
-    // Rows: sums of the torque residual over windows of up to kFitWindowSamples consecutive masked
-    // samples (the derivative noise of eq. 7 telescopes in a window sum).
-    std::vector<std::vector<std::size_t>> windows;
-    for (std::size_t k = 0; k < mask.size(); ++k) {
-        if (!mask[k]) continue;
-        if (windows.empty() || windows.back().size() >= window_samples || windows.back().back() + 1 != k) {
-            windows.emplace_back();
+namespace {
+
+/// The rows of a fit: sums of the torque residual over windows of up to `window_samples` consecutive
+/// masked samples (the derivative noise of eq. 7 telescopes in a window sum), or with a
+/// `trajectory_floor` the trajectory rows in noise floors.
+class FitRows {
+public:
+    FitRows(const RunSignals& measured, const std::vector<char>& mask, std::size_t window_samples,
+            const NoiseFloor* trajectory_floor)
+        : measured_(measured), trajectory_floor_(trajectory_floor) {
+        for (std::size_t k = 0; k < mask.size(); ++k) {
+            if (!mask[k]) continue;
+            if (windows_.empty() || windows_.back().size() >= window_samples || windows_.back().back() + 1 != k) {
+                windows_.emplace_back();
+            }
+            windows_.back().push_back(k);
         }
-        windows.back().push_back(k);
+        m_ = static_cast<Eigen::Index>(trajectory_floor != nullptr ? kTrajectoryChannels * measured.size() : windows_.size());
     }
-    const auto m = static_cast<Eigen::Index>(trajectory_floor != nullptr ? kTrajectoryChannels * measured.size()
-                                                                         : windows.size());
-    const auto np = static_cast<Eigen::Index>(names.size());
-    // The window sums of measured minus model T_R for a re-simulated run's signals (or the
-    // trajectory rows in noise floors).
-    auto residual_of = [&](const RunSignals& sim_s) {
-        if (trajectory_floor != nullptr) {
-            const std::vector<double> rows = trajectory_rows(measured, sim_s, *trajectory_floor);
+    [[nodiscard]] Eigen::Index count() const { return m_; }
+    /// The window sums of measured minus model T_R for a re-simulated run's signals (or the
+    /// trajectory rows in noise floors).
+    [[nodiscard]] Eigen::VectorXd residual_of(const RunSignals& sim_s) const {
+        if (trajectory_floor_ != nullptr) {
+            const std::vector<double> rows = trajectory_rows(measured_, sim_s, *trajectory_floor_);
             return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(rows.data(), static_cast<Eigen::Index>(rows.size())));
         }
-        Eigen::VectorXd e(m);
-        for (Eigen::Index i = 0; i < m; ++i) {
+        Eigen::VectorXd e(m_);
+        for (Eigen::Index i = 0; i < m_; ++i) {
             double sum = 0;
-            for (std::size_t k : windows[static_cast<std::size_t>(i)]) {
-                sum += measured.residual_torque_nm[k] - sim_s.residual_torque_nm[k];
+            for (std::size_t k : windows_[static_cast<std::size_t>(i)]) {
+                sum += measured_.residual_torque_nm[k] - sim_s.residual_torque_nm[k];
             }
             e(i) = sum;
         }
         return e;
-    };
-    // One batch of re-simulations (resimulate_many: side by side in SIMD lanes) evaluates a trial
-    // point q together with the forward-difference steps around it, so that when q is accepted the
-    // next iteration's Jacobian is already there. The further trials of the iteration (larger
-    // damping, each known before any is simulated: they differ only in lambda) run without their
-    // steps, in the free lanes of that batch or together in the next, and the steps follow for the
-    // one accepted. Every value is that of simulating each point alone (the lanes give the scalar path's results
-    // bit for bit), so the fit is the same, bit for bit, as trying one point after another.
-    struct Point {
-        sim::EmaParams params;
-        Eigen::VectorXd e;                     ///< window sums of measured - model T_R at params
-        RunSignals signals;                    ///< the re-simulation at params
-        std::vector<Eigen::VectorXd> stepped;  ///< the same at params + h_j along parameter j
-        std::vector<double> actual;            ///< h_j after clamping to the parameter's range
-        bool with_point = true;                ///< evaluate: simulate params (false: e, signals known)
-        bool with_steps = true;                ///< evaluate: simulate the steps
-    };
-    auto with_fsj = [&](sim::EmaParams q) {
-        q.fsj_nm = std::max(fsj_base_nm, q.fdj_nm);
+    }
+
+private:
+    const RunSignals& measured_;
+    const NoiseFloor* trajectory_floor_;
+    std::vector<std::vector<std::size_t>> windows_;
+    Eigen::Index m_ = 0;
+};
+
+/// A point of the Levenberg-Marquardt fit, with what its evaluation gives.
+struct FitPoint {
+    sim::EmaParams params;
+    Eigen::VectorXd e;                     ///< window sums of measured - model T_R at params
+    RunSignals signals;                    ///< the re-simulation at params
+    std::vector<Eigen::VectorXd> stepped;  ///< the same at params + h_j along parameter j
+    std::vector<double> actual;            ///< h_j after clamping to the parameter's range
+    bool with_point = true;                ///< evaluate: simulate params (false: e, signals known)
+    bool with_steps = true;                ///< evaluate: simulate the steps
+};
+
+/// One batch of re-simulations (resimulate_many: side by side in SIMD lanes) evaluates a trial
+/// point q together with the forward-difference steps around it, so that when q is accepted the
+/// next iteration's Jacobian is already there. The further trials of the iteration (larger
+/// damping, each known before any is simulated: they differ only in lambda) run without their
+/// steps, in the free lanes of that batch or together in the next, and the steps follow for the
+/// one accepted. Every value is that of simulating each point alone (the lanes give the scalar path's results
+/// bit for bit), so the fit is the same, bit for bit, as trying one point after another.
+class FitEvaluator {
+public:
+    FitEvaluator(const ResimTarget& target, const std::vector<FitParameter>& parameters, double fsj_base_nm,
+                 const FitRows& rows, int& simulations)
+        : target_(target), parameters_(parameters), fsj_base_nm_(fsj_base_nm), rows_(rows), simulations_(simulations) {}
+
+    [[nodiscard]] sim::EmaParams with_fsj(sim::EmaParams q) const {
+        q.fsj_nm = std::max(fsj_base_nm_, q.fdj_nm);
         return q;
-    };
-    // Evaluates each of `points` (unless its with_point is false: its e and signals are known
-    // already), with its steps when its with_steps, and `extra`, whose residual goes to *extra_e.
-    auto evaluate = [&](std::vector<Point>& points, const sim::EmaParams* extra, Eigen::VectorXd* extra_e) {
+    }
+    /// Evaluates each of `points` (unless its with_point is false: its e and signals are known
+    /// already), with its steps when its with_steps, and `extra`, whose residual goes to *extra_e.
+    void evaluate(std::vector<FitPoint>& points, const sim::EmaParams* extra, Eigen::VectorXd* extra_e) const {
+        const auto np = static_cast<Eigen::Index>(parameters_.size());
         std::vector<sim::EmaParams> batch;
         for (auto& pt : points) {
             if (pt.with_point) batch.push_back(with_fsj(pt.params));
@@ -323,130 +297,188 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
             pt.actual.assign(static_cast<std::size_t>(np), 0.0);
             for (Eigen::Index j = 0; j < np; ++j) {
                 const auto ju = static_cast<std::size_t>(j);
-                const std::string& name = names[ju];
-                const ParamSpec& sp = spec(name);
-                const double v = get_parameter(pt.params, name);
-                double h = std::max(sp.step_abs, kStepRel * std::abs(v));
-                if (v + h > sp.hi) h = -h;
+                const FitParameter& parameter = parameters_[ju];
+                const double v = get_parameter(pt.params, parameter);
+                double h = std::max(fit_step_floor(parameter), kStepRel * std::abs(v));
+                if (v + h > fit_range(parameter).hi) h = -h;
                 sim::EmaParams q = pt.params;
-                set_parameter(q, name, v + h);
-                pt.actual[ju] = get_parameter(q, name) - v;
+                set_parameter(q, parameter, v + h);
+                pt.actual[ju] = get_parameter(q, parameter) - v;
                 batch.push_back(with_fsj(q));
             }
         }
         if (extra != nullptr) batch.push_back(with_fsj(*extra));
-        const std::vector<Run> runs = resimulate_many(run, batch);
-        fr.simulations += static_cast<int>(runs.size());
+        std::vector<RunSignals> runs = resimulate_signals_many(target_, batch);
+        simulations_ += static_cast<int>(runs.size());
         std::size_t k = 0;
         for (auto& pt : points) {
             if (pt.with_point) {
-                pt.signals = run_signals(runs[k++]);
-                pt.e = residual_of(pt.signals);
+                pt.signals = std::move(runs[k++]);
+                pt.e = rows_.residual_of(pt.signals);
             }
             if (!pt.with_steps) continue;
             pt.stepped.clear();
-            for (Eigen::Index j = 0; j < np; ++j) pt.stepped.push_back(residual_of(run_signals(runs[k++])));
+            for (Eigen::Index j = 0; j < np; ++j) pt.stepped.push_back(rows_.residual_of(runs[k++]));
         }
-        if (extra != nullptr) *extra_e = residual_of(run_signals(runs[k]));
+        if (extra != nullptr) *extra_e = rows_.residual_of(runs[k]);
+    }
+    [[nodiscard]] const std::vector<FitParameter>& parameters() const { return parameters_; }
+
+private:
+    const ResimTarget& target_;
+    const std::vector<FitParameter>& parameters_;
+    double fsj_base_nm_;
+    const FitRows& rows_;
+    int& simulations_;
+};
+
+/// Where the fit stands: the accepted point p (with its steps), its residual and cost, the damping.
+struct FitState {
+    sim::EmaParams p;
+    Eigen::VectorXd e;
+    double cost = 0;
+    double lambda = kFitStartDamping;
+    FitPoint at_p;
+};
+
+enum class FitIteration { Improved, Converged, Stuck };
+
+/// One Levenberg-Marquardt iteration from `st`: the Jacobian into `jac`, then the trials at lambda,
+/// 10 lambda, ... until one lowers the cost (Improved, or Converged when it lowers it by less than
+/// kFitRelativeTolerance); Stuck when none does.
+FitIteration fit_iteration(const FitEvaluator& ev, FitState& st, Eigen::MatrixXd& jac) {
+    const std::vector<FitParameter>& parameters = ev.parameters();
+    const auto np = static_cast<Eigen::Index>(parameters.size());
+    sim::EmaParams& p = st.p;
+    Eigen::VectorXd& e = st.e;
+    double& cost = st.cost;
+    double& lambda = st.lambda;
+    FitPoint& at_p = st.at_p;
+    // Forward differences of the model's T_R (e = y - f, so df = -(e_step - e)).
+    for (Eigen::Index j = 0; j < np; ++j) {
+        const auto ju = static_cast<std::size_t>(j);
+        jac.col(j) = -(at_p.stepped[ju] - e) / at_p.actual[ju];
+    }
+    const Eigen::MatrixXd jtj = jac.transpose() * jac;
+    const Eigen::VectorXd jte = jac.transpose() * e;
+    // The trial point at damping lam.
+    auto trial_at = [&](double lam) {
+        Eigen::MatrixXd a = jtj;
+        a.diagonal() += lam * jtj.diagonal().cwiseMax(1e-30);
+        const Eigen::VectorXd delta = a.ldlt().solve(jte);
+        FitPoint q;
+        q.params = p;
+        for (Eigen::Index j = 0; j < np; ++j) {
+            const FitParameter& parameter = parameters[static_cast<std::size_t>(j)];
+            set_parameter(q.params, parameter, get_parameter(p, parameter) + delta(j));
+        }
+        return q;
     };
+    bool improved = false;
+    bool converged = false;
+    auto accept = [&](FitPoint& q) {
+        const double cq = q.e.squaredNorm();
+        const double gain = (cost - cq) / cost;
+        p = q.params;
+        e = q.e;
+        at_p = std::move(q);
+        cost = cq;
+        lambda = std::max(lambda / 10.0, 1e-9);
+        improved = true;
+        if (gain < kFitRelativeTolerance) converged = true;
+    };
+    // The trials at lambda, 10 lambda, ... in order; the first that lowers the cost is taken. The
+    // first goes with its steps; further ones share its batch while they fill the last vector's
+    // free lanes (no more vector passes), the rest follow in one batch if the first ones fail.
+    std::vector<double> lambdas;
+    std::vector<FitPoint> trials;
+    for (int tries = 0; tries < kFitTriesPerIteration; ++tries) {
+        lambdas.push_back(lambda);
+        trials.push_back(trial_at(lambda));
+        trials.back().with_steps = tries == 0;
+        lambda *= 10.0;  // the damping after this trial fails
+    }
+    const auto first_lanes = static_cast<std::size_t>(1 + np);
+    const std::size_t vector_lanes = std::max(1, sim::simd_target().lanes);
+    const std::size_t free_lanes = (vector_lanes - first_lanes % vector_lanes) % vector_lanes;
+    const std::size_t first_batch = std::min(trials.size(), 1 + free_lanes);
+    std::size_t evaluated = 0;
+    while (!improved && evaluated < trials.size()) {
+        const std::size_t count = evaluated == 0 ? first_batch : trials.size() - evaluated;
+        std::vector<FitPoint> batch(std::make_move_iterator(trials.begin() + static_cast<std::ptrdiff_t>(evaluated)),
+                                    std::make_move_iterator(trials.begin() + static_cast<std::ptrdiff_t>(evaluated + count)));
+        ev.evaluate(batch, nullptr, nullptr);
+        for (std::size_t i = 0; i < batch.size() && !improved; ++i) {
+            if (!(batch[i].e.squaredNorm() < cost)) continue;
+            lambda = lambdas[evaluated + i];
+            if (!batch[i].with_steps) {
+                batch[i].with_point = false;
+                batch[i].with_steps = true;
+                std::vector<FitPoint> accepted(1, std::move(batch[i]));
+                ev.evaluate(accepted, nullptr, nullptr);
+                accept(accepted[0]);
+            } else {
+                accept(batch[i]);
+            }
+        }
+        evaluated += count;
+    }
+    if (!improved) return FitIteration::Stuck;
+    return converged ? FitIteration::Converged : FitIteration::Improved;
+}
+
+}  // namespace
+
+FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
+                              const std::vector<FitParameter>& parameters, const std::vector<char>& mask,
+                              double fsj_base_nm, std::size_t window_samples, const sim::EmaParams* reference,
+                              int max_iterations, const NoiseFloor* trajectory_floor) {
+    FitResult fr;
+    const FitRows rows(measured, mask, window_samples, trajectory_floor);
+    const Eigen::Index m = rows.count();
+    const auto np = static_cast<Eigen::Index>(parameters.size());
+    const ResimTarget target = resim_target(run);
+    const FitEvaluator ev(target, parameters, fsj_base_nm, rows, fr.simulations);
     fr.rows = static_cast<std::size_t>(m);
-    std::vector<Point> current(1);
+    std::vector<FitPoint> current(1);
     current[0].params = start;
     Eigen::VectorXd e_reference;
-    evaluate(current, reference, &e_reference);
+    ev.evaluate(current, reference, &e_reference);
     if (reference != nullptr) fr.cost_reference = e_reference.squaredNorm();
-    sim::EmaParams p = start;
-    Eigen::VectorXd e = current[0].e;
-    fr.cost_start = e.squaredNorm();
-    double cost = fr.cost_start;
-    double lambda = kFitStartDamping;
+    FitState st;
+    st.p = start;
+    st.e = current[0].e;
+    fr.cost_start = st.e.squaredNorm();
+    st.cost = fr.cost_start;
     Eigen::MatrixXd jac(m, np);
-    Point at_p = std::move(current[0]);  // p with its steps
+    st.at_p = std::move(current[0]);  // p with its steps
     for (int it = 0; it < max_iterations; ++it) {
         fr.iterations = it + 1;
-        // Forward differences of the model's T_R (e = y - f, so df = -(e_step - e)).
-        for (Eigen::Index j = 0; j < np; ++j) {
-            const auto ju = static_cast<std::size_t>(j);
-            jac.col(j) = -(at_p.stepped[ju] - e) / at_p.actual[ju];
-        }
-        const Eigen::MatrixXd jtj = jac.transpose() * jac;
-        const Eigen::VectorXd jte = jac.transpose() * e;
-        // The trial point at damping lam.
-        auto trial_at = [&](double lam) {
-            Eigen::MatrixXd a = jtj;
-            a.diagonal() += lam * jtj.diagonal().cwiseMax(1e-30);
-            const Eigen::VectorXd delta = a.ldlt().solve(jte);
-            Point q;
-            q.params = p;
-            for (Eigen::Index j = 0; j < np; ++j) {
-                const std::string& name = names[static_cast<std::size_t>(j)];
-                set_parameter(q.params, name, get_parameter(p, name) + delta(j));
-            }
-            return q;
-        };
-        bool improved = false;
-        auto accept = [&](Point& q) {
-            const double cq = q.e.squaredNorm();
-            const double gain = (cost - cq) / cost;
-            p = q.params;
-            e = q.e;
-            at_p = std::move(q);
-            cost = cq;
-            lambda = std::max(lambda / 10.0, 1e-9);
-            improved = true;
-            if (gain < kFitRelativeTolerance) it = max_iterations;  // converged
-        };
-        // The trials at lambda, 10 lambda, ... in order; the first that lowers the cost is taken. The
-        // first goes with its steps; further ones share its batch while they fill the last vector's
-        // free lanes (no more vector passes), the rest follow in one batch if the first ones fail.
-        std::vector<double> lambdas;
-        std::vector<Point> trials;
-        for (int tries = 0; tries < kFitTriesPerIteration; ++tries) {
-            lambdas.push_back(lambda);
-            trials.push_back(trial_at(lambda));
-            trials.back().with_steps = tries == 0;
-            lambda *= 10.0;  // the damping after this trial fails
-        }
-        const auto first_lanes = static_cast<std::size_t>(1 + np);
-        const std::size_t vector_lanes = std::max(1, sim::simd_target().lanes);
-        const std::size_t free_lanes = (vector_lanes - first_lanes % vector_lanes) % vector_lanes;
-        const std::size_t first_batch = std::min(trials.size(), 1 + free_lanes);
-        std::size_t evaluated = 0;
-        while (!improved && evaluated < trials.size()) {
-            const std::size_t count = evaluated == 0 ? first_batch : trials.size() - evaluated;
-            std::vector<Point> batch(std::make_move_iterator(trials.begin() + static_cast<std::ptrdiff_t>(evaluated)),
-                                     std::make_move_iterator(trials.begin() + static_cast<std::ptrdiff_t>(evaluated + count)));
-            evaluate(batch, nullptr, nullptr);
-            for (std::size_t i = 0; i < batch.size() && !improved; ++i) {
-                if (!(batch[i].e.squaredNorm() < cost)) continue;
-                lambda = lambdas[evaluated + i];
-                if (!batch[i].with_steps) {
-                    batch[i].with_point = false;
-                    batch[i].with_steps = true;
-                    std::vector<Point> accepted(1, std::move(batch[i]));
-                    evaluate(accepted, nullptr, nullptr);
-                    accept(accepted[0]);
-                } else {
-                    accept(batch[i]);
-                }
-            }
-            evaluated += count;
-        }
-        if (!improved) break;
+        if (fit_iteration(ev, st, jac) != FitIteration::Improved) break;
     }
+    const sim::EmaParams& p = st.p;
+    const double cost = st.cost;
     fr.params = p;
     fr.params.fsj_nm = std::max(fsj_base_nm, p.fdj_nm);
     fr.cost_end = cost;
-    fr.signals = std::move(at_p.signals);
+    fr.signals = std::move(st.at_p.signals);
     // Standard errors from the last Jacobian: cov = s^2 (J^T J)^-1, s^2 = cost / (m - p).
     const Eigen::MatrixXd jtj = jac.transpose() * jac;
     const double s2 = cost / std::max<double>(1.0, static_cast<double>(m - np));
     const Eigen::MatrixXd cov = s2 * jtj.completeOrthogonalDecomposition().pseudoInverse();
     for (Eigen::Index j = 0; j < np; ++j) {
-        const std::string& name = names[static_cast<std::size_t>(j)];
-        fr.values.push_back({name, get_parameter(p, name), std::sqrt(std::max(0.0, cov(j, j)))});
+        const FitParameter& parameter = parameters[static_cast<std::size_t>(j)];
+        fr.values.emplace_back(parameter, get_parameter(p, parameter), std::sqrt(std::max(0.0, cov(j, j))));
     }
     return fr;
+}
+
+FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
+                              const std::vector<std::string>& names, const std::vector<char>& mask,
+                              double fsj_base_nm, std::size_t window_samples, const sim::EmaParams* reference,
+                              int max_iterations, const NoiseFloor* trajectory_floor) {
+    return fit_by_resimulation(run, measured, start, parameters_from_names(names), mask, fsj_base_nm, window_samples,
+                               reference, max_iterations, trajectory_floor);
 }
 
 }  // namespace emadiag::discovery

@@ -5,6 +5,7 @@
 #include "core/run.hpp"
 #include "discovery/model/run_signals.hpp"
 #include "discovery/model/trajectory.hpp"
+#include "discovery/model/fit_parameter.hpp"
 #include "emadiag/sim/ema_params.hpp"
 #include "emadiag/sim/simulator.hpp"
 
@@ -38,8 +39,27 @@ struct ErrorMetrics {
     std::size_t torque_samples = 0;
 };
 
-/// The simulation of the run's case and sequence with `params`, noise none.
+/// What a re-simulation takes from the measured run, typed once: its case and sequence as the
+/// simulator's enums, its length and its constants (k_t, J, tau, sample period). The run must have
+/// been checked (run_signals); the re-simulation's samples are then not checked again.
+struct ResimTarget {
+    sim::LoadCase load_case = sim::LoadCase::B;
+    sim::Sequence sequence = sim::Sequence::Dyn;
+    std::size_t samples = 0;
+    RunConstants constants;
+};
+/// The run's ResimTarget. Throws EmadiagError when its sample period is not the simulator's (within
+/// kSamplePeriodTolerance of run_checks.hpp): the re-simulation would not line up with its samples.
+[[nodiscard]] ResimTarget resim_target(const Run& run);
+/// The simulation of the target's case and sequence with `params`, noise none.
+[[nodiscard]] sim::SimConfig resim_config(const ResimTarget& target, const sim::EmaParams& params);
 [[nodiscard]] sim::SimConfig resim_config(const Run& run, const sim::EmaParams& params);
+/// The signals of the re-simulation (run_signals of resimulate's Run, computed from the simulator's
+/// samples and the target's constants without a Run's metadata or a second check_run).
+[[nodiscard]] RunSignals resimulate_signals(const ResimTarget& target, const sim::EmaParams& params);
+/// resimulate_signals for each of `params` at once, as resimulate_many.
+[[nodiscard]] std::vector<RunSignals> resimulate_signals_many(const ResimTarget& target,
+                                                              const std::vector<sim::EmaParams>& params);
 /// The re-simulated run (make_run), with the measured run's constants so eq. 7 is the same.
 [[nodiscard]] Run resimulate(const Run& run, const sim::EmaParams& params);
 /// resimulate for each of `params` at once: one sim::simulate_batch on two threads, whose SIMD lanes
@@ -61,9 +81,17 @@ inline constexpr double kKinkSecondDifferenceRadS = 3.0;
 [[nodiscard]] ErrorMetrics model_error(const RunSignals& measured, const RunSignals& model,
                                        const std::vector<char>& mask);
 
-/// A fitted parameter: "fdj_nm", "eta_o" or a sim::Effects name.
+/// A fitted parameter's value and standard error.
 struct FittedValue {
-    std::string name;
+    FittedValue() = default;
+    FittedValue(const FitParameter& fitted, double v, double se)
+        : parameter(fitted), name(fit_parameter_name(fitted)), value(v), std_error(se) {}
+    /// For discovery.cpp, which still names parameters by string (fit_parameter_from_name).
+    FittedValue(const std::string& fitted_name, double v, double se)
+        : FittedValue(fit_parameter_from_name(fitted_name), v, se) {}
+
+    FitParameter parameter = FitParameter::fdj();
+    std::string name;  ///< fit_parameter_name(parameter): what reports and JSON show
     double value = 0;
     double std_error = 0;
 };
@@ -82,7 +110,7 @@ struct FitResult {
 
 /// Levenberg-Marquardt on the torque residual (measured T_R - re-simulated T_R over `mask`, summed
 /// over windows of kFitWindowSamples consecutive samples),
-/// varying the named parameters of `start` (finite-difference Jacobian on the real simulator).
+/// varying `parameters` of `start` (finite-difference Jacobian on the real simulator).
 /// Parameters stay inside the simulator's allowed ranges; FSJ is max(fsj_base_nm, FDJ) at every
 /// trial point (the simulator needs FSJ >= FDJ; a DYN run does not identify FSJ).
 /// `window_samples` = 1 fits per sample (for a signature that changes within a window: ripple).
@@ -91,6 +119,14 @@ struct FitResult {
 /// the trajectory cost of trajectory.hpp; `mask` and `window_samples` are then not used. That is the
 /// objective for an effect the torque residual barely sees (a friction impulse while the speed
 /// crosses zero, docs/discovery.md "Low-speed friction by the trajectory").
+[[nodiscard]] FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
+                                            const std::vector<FitParameter>& parameters, const std::vector<char>& mask,
+                                            double fsj_base_nm, std::size_t window_samples = kFitWindowSamples,
+                                            const sim::EmaParams* reference = nullptr,
+                                            int max_iterations = kMaxFitIterations,
+                                            const NoiseFloor* trajectory_floor = nullptr);
+/// The same with the parameters by name (fit_parameter_from_name), for discovery.cpp until it passes
+/// FitParameter.
 [[nodiscard]] FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
                                             const std::vector<std::string>& names, const std::vector<char>& mask,
                                             double fsj_base_nm, std::size_t window_samples = kFitWindowSamples,
@@ -101,21 +137,5 @@ struct FitResult {
 /// (measured - model) / floor (a floor of 0 gives rows of 0).
 [[nodiscard]] std::vector<double> trajectory_rows(const RunSignals& measured, const RunSignals& model,
                                                   const NoiseFloor& floor);
-
-/// Term coefficients are fitted by the name "term:K", K the index in EmaParams::terms.
-[[nodiscard]] bool is_term_parameter(const std::string& name);
-[[nodiscard]] std::string term_parameter(std::size_t index);
-/// The range a fit keeps one parameter in (effects: inside sim::Effects::range, narrowed only where
-/// resimulation.cpp says why); throws on a parameter that cannot be fitted.
-struct FitRange {
-    double lo;
-    double hi;
-};
-[[nodiscard]] FitRange fit_range(const std::string& name);
-/// The effects (sim::Effects names) that discovery fits.
-[[nodiscard]] std::vector<std::string> fitted_effect_names();
-/// Reads / writes one fittable parameter of EmaParams by name (eta_o also sets eta_a by eq. 4).
-[[nodiscard]] double get_parameter(const sim::EmaParams& p, const std::string& name);
-void set_parameter(sim::EmaParams& p, const std::string& name, double value);
 
 }  // namespace emadiag::discovery

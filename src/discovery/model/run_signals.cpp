@@ -25,6 +25,10 @@ std::size_t RunSignals::slipping_count() const {
 
 RunSignals run_signals(const Run& run) {
     check_run(run);
+    return unchecked_run_signals(run);
+}
+
+RunSignals unchecked_run_signals(const Run& run) {
     RunSignals s;
     s.k_t_nm_per_a = run.constants.k_t_nm_per_a;
     s.j_kgm2 = run.constants.j_kgm2;

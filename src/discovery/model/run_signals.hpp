@@ -34,6 +34,10 @@ struct RunSignals {
 
 /// Throws EmadiagError (via estimation/run_checks.hpp) on NaN, too few samples, bad constants.
 [[nodiscard]] RunSignals run_signals(const Run& run);
+/// run_signals without check_run, for samples that need no check: a re-simulation's
+/// (resimulation.hpp), made by the simulator (finite, evenly spaced) with the constants and length of
+/// a run that run_signals checked. Reads only the constants and samples of `run`.
+[[nodiscard]] RunSignals unchecked_run_signals(const Run& run);
 
 /// eq. (5) with eq. (3): the friction law's torque at sample k, signed like T_R.
 [[nodiscard]] double friction_law_nm(const RunSignals& s, std::size_t k, double fdj_nm, double eta_o);

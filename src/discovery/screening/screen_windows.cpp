@@ -1,6 +1,3 @@
-// GCC 12 reports false -Wmaybe-uninitialized inside Eigen's AVX-512 kernels (matrix-vector product).
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#pragma GCC diagnostic ignored "-Wuninitialized"
 #include "discovery/screening/screen_windows.hpp"
 
 #include "core/emadiag_error.hpp"
