@@ -22,7 +22,7 @@
 #include "diagnosis/test_run.hpp"
 #include "diagnosis/verdict.hpp"
 #include "emadiag/db/run_store.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 #include "emadiag/io/text_field.hpp"
 #include "emadiag/sim/simulator.hpp"
 #include "estimation/health_estimate.hpp"

@@ -11,7 +11,7 @@
 #include "core/run_summary.hpp"
 #include "emadiag/db/run_store.hpp"
 #include "emadiag/db/sha256.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 #include "emadiag/io/utc_now.hpp"
 
 #include <ctime>

@@ -7,7 +7,7 @@
 #include "emadiag/db/db_error.hpp"
 #include "emadiag/db/record_store.hpp"
 #include "emadiag/db/sha256.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 #include "support/node_runner.hpp"
 
 #include <gmock/gmock.h>

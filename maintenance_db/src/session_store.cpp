@@ -1,4 +1,4 @@
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 
 #include "emadiag/db/db_error.hpp"
 #include "emadiag/db/record_store.hpp"

@@ -3,7 +3,7 @@
 // and the upgrade of a version-1 file in place.
 #include "emadiag/db/db_error.hpp"
 #include "emadiag/db/run_store.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 #include "support/db_test_files.hpp"
 #include "support/stored_run_example.hpp"
 
