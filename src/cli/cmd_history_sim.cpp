@@ -19,7 +19,7 @@
 #include "core/run_csv.hpp"
 #include "core/sim_run.hpp"
 #include "diagnosis/health_limits.hpp"
-#include "diagnosis/test_run.hpp"
+#include "diagnosis/ground_test.hpp"
 #include "diagnosis/verdict.hpp"
 #include "emadiag/db/run_store.hpp"
 #include "emadiag/db/session_store.hpp"

@@ -1,4 +1,4 @@
-#include "diagnosis/test_run.hpp"
+#include "diagnosis/ground_test.hpp"
 
 #include "core/run_validity.hpp"
 

@@ -2,7 +2,7 @@
 // it with separate processes over SocketCAN): verdicts for a healthy and a worn transmission,
 // everything stored under the tail number, and the refusals that must come before anything moves.
 #include "core/emadiag_error.hpp"
-#include "diagnosis/test_run.hpp"
+#include "diagnosis/ground_test.hpp"
 #include "emadiag/can/memory_bus.hpp"
 #include "emadiag/db/db_error.hpp"
 #include "emadiag/db/record_store.hpp"
