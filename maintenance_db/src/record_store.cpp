@@ -208,7 +208,7 @@ std::vector<std::string> check_discovery_chain(Database& db, const std::string& 
 /// The installations the sessions of a tail imply, in the order the store records them: a session
 /// at a position that shows a serial other than the one installed there (the serial of the
 /// position's newest session so far, by started_utc; position_status). The rule of insert_session
-/// and add_to_summaries (session_store.cpp), replayed over the sessions in session_id order.
+/// and add_to_summaries (session_summaries.cpp), replayed over the sessions in session_id order.
 std::vector<StoredInstallation> installations_implied(const std::vector<StoredTestSession>& sessions) {
     struct Installed {
         std::string serial, last_utc;
