@@ -4,8 +4,10 @@
 
 #include "record_detail.hpp"
 
+#include "emadiag/calc/civil_days.hpp"
+#include "emadiag/calc/inverse_variance.hpp"
+
 #include <algorithm>
-#include <cmath>
 #include <string_view>
 
 namespace emadiag::db {
@@ -14,16 +16,6 @@ using namespace detail;
 namespace {
 /// Estimators whose findings are measurements (the network findings are the verdict's cross-check).
 constexpr std::string_view kPhysicsPrefix = "physics";
-
-int64_t days_from_civil(int y, unsigned m, unsigned d) {
-    // H. Hinnant, "chrono-compatible low-level date algorithms": days since 1970-01-01.
-    y -= m <= 2 ? 1 : 0;
-    const int era = (y >= 0 ? y : y - 399) / 400;
-    const unsigned yoe = static_cast<unsigned>(y - era * 400);
-    const unsigned doy = (153 * (m + (m > 2 ? -3 : 9)) + 2) / 5 + d - 1;
-    const unsigned doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
-    return static_cast<int64_t>(era) * 146097 + static_cast<int64_t>(doe) - 719468;
-}
 
 /// Days since 1970 of "YYYY-MM-DDThh:mm:ss..." (checked by check_session; fractions of a second ignored).
 double utc_days(const std::string& iso) {
@@ -36,8 +28,7 @@ double utc_days(const std::string& iso) {
         for (std::size_t i = at; i < at + len; ++i) v = v * 10 + (iso[i] - '0');
         return v;
     };
-    return static_cast<double>(days_from_civil(n(0, 4), static_cast<unsigned>(n(5, 2)), static_cast<unsigned>(n(8, 2)))) +
-           (n(11, 2) * 3600.0 + n(14, 2) * 60.0 + n(17, 2)) / 86400.0;
+    return calc::days_since_epoch(n(0, 4), n(5, 2), n(8, 2), n(11, 2) * 3600.0 + n(14, 2) * 60.0 + n(17, 2));
 }
 
 std::optional<SeriesStats>& series_row(Database& db, std::map<std::string, std::optional<SeriesStats>>& group, const std::string& tail,
@@ -189,7 +180,7 @@ std::vector<SessionMeasurement> session_measurements(const std::vector<StoredFin
     // sums in the order of the findings, the result sorted by parameter.
     struct Acc {
         SessionMeasurement m;
-        double sum_w = 0, sum_wy = 0;
+        calc::InverseVarianceMean mean;
     };
     std::vector<Acc> acc;
     acc.reserve(findings.size());
@@ -205,18 +196,16 @@ std::vector<SessionMeasurement> session_measurements(const std::vector<StoredFin
             it->m.limit_value = f.limit_value;
         }
         if (f.estimator.rfind(kPhysicsPrefix, 0) != 0 || !f.value) continue;
-        if (!f.std_error || !(*f.std_error > 0) || !std::isfinite(*f.std_error)) continue;
-        const double w = 1.0 / (*f.std_error * *f.std_error);
-        it->sum_w += w;
-        it->sum_wy += w * *f.value;
+        if (!f.std_error || !calc::is_weightable(*f.std_error)) continue;
+        it->mean.add(*f.value, *f.std_error);
     }
     std::sort(acc.begin(), acc.end(), [](const Acc& x, const Acc& y) { return x.m.parameter < y.m.parameter; });
     std::vector<SessionMeasurement> out;
     out.reserve(acc.size());
     for (auto& a : acc) {
-        if (!(a.sum_w > 0)) continue;
-        a.m.value = a.sum_wy / a.sum_w;
-        a.m.std_error = 1.0 / std::sqrt(a.sum_w);
+        if (!(a.mean.sum_w > 0)) continue;
+        a.m.value = a.mean.mean();
+        a.m.std_error = a.mean.std_error();
         out.push_back(std::move(a.m));
     }
     return out;
