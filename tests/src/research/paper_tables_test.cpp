@@ -2,7 +2,7 @@
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #pragma GCC diagnostic ignored "-Wuninitialized"
 // paper-tables: the eta-confound floor and a quick run of every table.
-#include "estimation/paper_tables.hpp"
+#include "research/paper_tables.hpp"
 
 #include "estimation/nn_trainer.hpp"
 
