@@ -3,7 +3,7 @@
 // intervals, for noise none and typical. Then the estimator's speed as Google benchmarks.
 //   calibration_bench [count [seed]]   (defaults 200, 7); set count 0 to skip the figures.
 #include "core/sim_run.hpp"
-#include "estimation/physics_calibration.hpp"
+#include "research/physics_calibration.hpp"
 #include "estimation/physics_estimator.hpp"
 
 #include <benchmark/benchmark.h>

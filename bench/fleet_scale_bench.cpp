@@ -13,7 +13,7 @@
 #include "emadiag/db/database.hpp"
 #include "emadiag/db/record_store.hpp"
 #include "emadiag/db/sha256.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 #include "prognostics/fleet_record.hpp"
 #include "prognostics/fleet_view.hpp"
 

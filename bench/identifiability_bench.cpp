@@ -548,7 +548,7 @@ void print_part1c(const char* name, const std::vector<HealthLabels>& L, const st
 
 // ---- the current estimator on the same labels (noisy runs as evaluate_physics builds them)
 
-constexpr std::uint64_t kNoiseSeedStride = 1000003;  // as in src/estimation/physics_calibration.cpp
+constexpr std::uint64_t kNoiseSeedStride = 1000003;  // as in src/research/physics_calibration.cpp
 
 // Relative FSJ error of estimate_physics per run (NAN when it throws or reports no FSJ).
 std::vector<double> estimator_fsj_error(sim::LoadCase lc, const std::vector<HealthLabels>& labels, std::uint64_t seed,

@@ -1,5 +1,5 @@
 #pragma once
-// Parts of the record (test_session_store.cpp) the migration code in database.cpp calls. Not installed.
+// Parts of the record (session_store.cpp) the migration code in database.cpp calls. Not installed.
 #include "emadiag/db/database.hpp"
 #include "emadiag/db/record_store.hpp"
 

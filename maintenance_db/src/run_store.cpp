@@ -128,14 +128,6 @@ void check_tail_number(const std::string& tail_number) {
     if (const auto problem = detail::tail_number_problem(tail_number)) throw DbError(*problem);
 }
 
-std::int64_t store_run(Database& db, const StoredRun& run) {
-    detail::check_run(run, "");
-    Transaction tx(db);
-    const std::int64_t id = detail::insert_run(db, run, std::nullopt);
-    tx.commit();
-    return id;
-}
-
 namespace {
 constexpr const char* kRunColumns =
     "run_id, tail_number, actuator_serial, started_utc, source, load_case, sequence, k_t_nm_per_a, j_kgm2, tau, "

@@ -1,5 +1,5 @@
 #pragma once
-// The parts of run_store.cpp that test_session_store.cpp reuses: checking a run, writing it inside
+// The parts of run_store.cpp that session_store.cpp reuses: checking a run, writing it inside
 // the caller's transaction (SQLite has no nested BEGIN) and reading runs back. Not installed.
 #include "emadiag/db/database.hpp"
 #include "emadiag/db/run_store.hpp"

@@ -16,7 +16,7 @@
 #include "emadiag/db/database.hpp"
 #include "emadiag/db/run_store.hpp"
 #include "emadiag/db/record_store.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 #include "emadiag/sim/simulator.hpp"
 #include "emadiag/io/output_path.hpp"
 #include "emadiag/io/text_field.hpp"

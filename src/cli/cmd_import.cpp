@@ -15,7 +15,7 @@
 #include "diagnosis/health_limits.hpp"
 #include "diagnosis/session_storage.hpp"
 #include "diagnosis/verdict.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 #include "emadiag/io/text_field.hpp"
 #include "estimation/run_estimator.hpp"
 #include "prognostics/utc_time.hpp"

@@ -2,7 +2,7 @@
 #include "cli/command.hpp"
 #include "core/emadiag_error.hpp"
 #include "emadiag/io/output_path.hpp"
-#include "estimation/paper_tables.hpp"
+#include "research/paper_tables.hpp"
 
 #include <algorithm>
 #include <iostream>

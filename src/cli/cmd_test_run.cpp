@@ -1,12 +1,12 @@
 // emadiag test-run --bus socketcan:can0 --tail N123EM [--phase pre-flight|post-flight] --db FILE
-// [--model AUGMENTED.json]: the technician's one command on the ramp (diagnosis/test_run.hpp). It prints progress, the
+// [--model AUGMENTED.json]: the technician's one command on the ramp (diagnosis/ground_test.hpp). It prints progress, the
 // findings against the limits and the verdict; the exit code is the verdict.
 #include "cli/command.hpp"
 #include "cli/db_source.hpp"
 #include "cli/interrupt.hpp"
 #include "cli/record_options.hpp"
 
-#include "diagnosis/test_run.hpp"
+#include "diagnosis/ground_test.hpp"
 #include "estimation/health_estimate.hpp"
 #include "emadiag/can/can_bus.hpp"
 

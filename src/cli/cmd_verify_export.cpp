@@ -12,7 +12,7 @@
 #include "core/emadiag_error.hpp"
 #include "emadiag/db/record_store.hpp"
 #include "emadiag/db/sha256.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 
 #include <nlohmann/json.hpp>
 

@@ -1,7 +1,7 @@
 #include "diagnosis/session_spool.hpp"
 
 #include "diagnosis/augmented_model_use.hpp"
-#include "diagnosis/test_run.hpp"
+#include "diagnosis/ground_test.hpp"
 
 #include "can_tool/candump_run.hpp"
 #include "core/emadiag_error.hpp"

@@ -8,7 +8,7 @@
 // the live run, stores the session in one transaction and only then deletes the manifest.
 #include "diagnosis/health_limits.hpp"
 
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 
 #include <filesystem>
 #include <functional>

@@ -5,7 +5,7 @@
 #include "diagnosis/verdict.hpp"
 #include "estimation/run_estimator.hpp"
 
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 
 #include <cstdint>
 #include <optional>

@@ -10,7 +10,7 @@
 #include "emadiag/db/database.hpp"
 #include "emadiag/db/record_source.hpp"
 #include "emadiag/db/record_store.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 #include "prognostics/trend_report.hpp"
 
 #include <nlohmann/json.hpp>

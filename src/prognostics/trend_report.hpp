@@ -8,7 +8,7 @@
 // documented schema.
 #include "emadiag/db/database.hpp"
 #include "emadiag/db/record_source.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 #include "prognostics/degradation_fit.hpp"
 #include "prognostics/rul_estimate.hpp"
 #include "prognostics/trend_series.hpp"

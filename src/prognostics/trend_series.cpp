@@ -3,6 +3,8 @@
 #include "core/emadiag_error.hpp"
 #include "prognostics/utc_time.hpp"
 
+#include "emadiag/calc/inverse_variance.hpp"
+
 #include <cmath>
 #include <sstream>
 
@@ -57,7 +59,7 @@ ParameterSeries series_of(const std::vector<Session>& sessions, const std::vecto
     std::vector<std::int64_t> skipped;
     for (std::size_t i = 0; i < sessions.size(); ++i) {
         const db::StoredTestSession& s = deref(sessions[i]);
-        double sum_w = 0, sum_wy = 0;
+        calc::InverseVarianceMean mean;
         TrendPoint p;
         std::vector<std::string> unusable;
         for (const auto& f : s.findings) {
@@ -73,26 +75,24 @@ ParameterSeries series_of(const std::vector<Session>& sessions, const std::vecto
             }
             if (!is_physics(f) || !f.value) continue;
             // Inverse-variance weighting needs a positive finite standard error.
-            if (!f.std_error || !(*f.std_error > 0) || !std::isfinite(*f.std_error)) {
+            if (!f.std_error || !calc::is_weightable(*f.std_error)) {
                 unusable.push_back(f.estimator + " (value " + num(*f.value) + " without a positive standard error)");
                 continue;
             }
-            const double w = 1.0 / (*f.std_error * *f.std_error);
-            sum_w += w;
-            sum_wy += w * *f.value;
+            mean.add(*f.value, *f.std_error);
             p.estimators.push_back(f.estimator);
         }
         for (const auto& u : unusable)
             out.notes.push_back("session " + std::to_string(s.session_id) + ": " + parameter + " finding " + u + " not used");
-        if (sum_w == 0) {
+        if (mean.sum_w == 0) {
             skipped.push_back(s.session_id);
             continue;
         }
         p.session_id = s.session_id;
         p.started_utc = s.started_utc;
         p.t_days = days[i] - origin_days;
-        p.value = sum_wy / sum_w;
-        p.std_error = 1.0 / std::sqrt(sum_w);
+        p.value = mean.mean();
+        p.std_error = mean.std_error();
         out.points.push_back(std::move(p));
     }
     if (!skipped.empty()) {

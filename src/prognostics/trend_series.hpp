@@ -5,7 +5,7 @@
 //   y = sum(w_i y_i) / sum(w_i),  se = 1 / sqrt(sum(w_i)),  w_i = 1 / se_i^2
 // (the network findings are the cross-check of the verdict, not a measurement here). Sessions
 // without such a finding are left out of that parameter's series, with a note.
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 
 #include <cstdint>
 #include <optional>

@@ -24,17 +24,6 @@ int days_in_month(std::int64_t y, int m) {
     return m == 2 && is_leap(y) ? 29 : kDays[m - 1];
 }
 
-/// Days from 1970-01-01 to y-m-d (proleptic Gregorian): H. Hinnant, "chrono-Compatible Low-Level
-/// Date Algorithms", days_from_civil.
-std::int64_t days_from_civil(std::int64_t y, int m, int d) {
-    y -= m <= 2 ? 1 : 0;
-    const std::int64_t era = (y >= 0 ? y : y - 399) / 400;
-    const std::int64_t yoe = y - era * 400;
-    const std::int64_t doy = (153 * (m + (m > 2 ? -3 : 9)) + 2) / 5 + d - 1;
-    const std::int64_t doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
-    return era * 146097 + doe - 719468;
-}
-
 /// The inverse: civil_from_days of the same paper.
 void civil_from_days(std::int64_t z, std::int64_t& y, int& m, int& d) {
     z += 719468;
@@ -105,7 +94,7 @@ std::optional<double> parse_utc_days(const std::string& text, std::string& probl
         return std::nullopt;
     }
     const double seconds = hour * kSecondsPerHour + minute * kSecondsPerMinute + second + fraction_s;
-    return static_cast<double>(days_from_civil(year, month, day)) + seconds / kSecondsPerDay;
+    return calc::days_since_epoch(year, month, day, seconds);
 }
 
 double parse_utc_days_or_throw(const std::string& text, const std::string& what) {

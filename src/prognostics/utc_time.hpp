@@ -1,12 +1,14 @@
 #pragma once
 // UTC times of test sessions as days on a continuous axis (proleptic Gregorian calendar, no leap
 // seconds), and back to calendar dates for the report.
+#include "emadiag/calc/civil_days.hpp"
+
 #include <optional>
 #include <string>
 
 namespace emadiag::prognostics {
 
-inline constexpr double kSecondsPerDay = 86400.0;
+inline constexpr double kSecondsPerDay = calc::kSecondsPerDay;
 
 /// Days since 1970-01-01T00:00:00Z of "YYYY-MM-DDThh:mm:ss" with an optional fraction (".123") and
 /// an optional "Z"; nothing else (no offsets, no date alone). Empty when `text` is not of that form

@@ -6,7 +6,7 @@
 #include "emadiag/db/record_store.hpp"
 #include "emadiag/db/run_store.hpp"
 #include "emadiag/db/sha256.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 #include "older_version_file.hpp"
 #include "support/db_test_files.hpp"
 #include "support/stored_run_example.hpp"

@@ -6,7 +6,7 @@
 #include "emadiag/db/database.hpp"
 #include "emadiag/db/db_error.hpp"
 #include "emadiag/db/run_store.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 
 #include "support/stored_run_example.hpp"
 

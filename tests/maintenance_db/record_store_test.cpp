@@ -5,7 +5,7 @@
 #include "emadiag/db/db_error.hpp"
 #include "emadiag/db/record_store.hpp"
 #include "emadiag/db/sha256.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 #include "support/db_test_files.hpp"
 #include "support/stored_run_example.hpp"
 

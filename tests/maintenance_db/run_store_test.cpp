@@ -2,6 +2,7 @@
 // stores, migrations, and misuse.
 #include "emadiag/db/db_error.hpp"
 #include "emadiag/db/run_store.hpp"
+#include "support/lone_run.hpp"
 #include "support/stored_run_example.hpp"
 
 #include <gmock/gmock.h>
@@ -22,7 +23,7 @@ TEST(RunStore, StoreThenLoadGivesBackEverything) {
     Database db(":memory:");
     EXPECT_EQ(db.schema_version(), 7);
     const StoredRun in = example_run();
-    const auto id = store_run(db, in);
+    const auto id = test::store_lone_run(db, in);
     const StoredRun out = load_run(db, id);
     EXPECT_EQ(out.tail_number, in.tail_number);
     EXPECT_EQ(out.actuator_serial, in.actuator_serial);
@@ -38,9 +39,9 @@ TEST(RunStore, StoreThenLoadGivesBackEverything) {
 
 TEST(RunStore, ListsRunsPerTailNumber) {
     Database db(":memory:");
-    (void)store_run(db, example_run("F-WEMA"));
-    (void)store_run(db, example_run("F-WEMB"));
-    (void)store_run(db, example_run("F-WEMA"));
+    (void)test::store_lone_run(db, example_run("F-WEMA"));
+    (void)test::store_lone_run(db, example_run("F-WEMB"));
+    (void)test::store_lone_run(db, example_run("F-WEMA"));
     EXPECT_EQ(list_runs(db, "F-WEMA").size(), 2U);
     EXPECT_EQ(list_runs(db, "F-WEMB").size(), 1U);
     EXPECT_TRUE(list_runs(db, "F-NONE").empty());
@@ -50,20 +51,20 @@ TEST(RunStore, InvalidRunWritesNothing) {
     Database db(":memory:");
     StoredRun bad = example_run();
     bad.samples[3].current_a = std::nan("");
-    EXPECT_THAT([&] { (void)store_run(db, bad); }, ThrowsMessage<DbError>(HasSubstr("current_a of sample 3 is not a finite number")));
+    EXPECT_THAT([&] { (void)test::store_lone_run(db, bad); }, ThrowsMessage<DbError>(HasSubstr("current_a of sample 3 is not a finite number")));
     bad = example_run();
     bad.estimates.push_back({"physics", "FDJ_Nm", 0.08, 0.001, true, "dup", ""});  // violates the primary key mid-transaction
-    EXPECT_THAT([&] { (void)store_run(db, bad); }, ThrowsMessage<DbError>(HasSubstr("failed")));
+    EXPECT_THAT([&] { (void)test::store_lone_run(db, bad); }, ThrowsMessage<DbError>(HasSubstr("failed")));
     EXPECT_TRUE(list_runs(db, "F-WEMA").empty()) << "the failed store was rolled back whole";
 }
 
 TEST(RunStore, MisuseIsAClearError) {
     Database db(":memory:");
-    EXPECT_THAT([&] { (void)store_run(db, example_run("f wema")); },
+    EXPECT_THAT([&] { (void)test::store_lone_run(db, example_run("f wema")); },
                 ThrowsMessage<DbError>(HasSubstr("tail number 'f wema' is not valid")));
     StoredRun no_log = example_run();
     no_log.raw_log.clear();
-    EXPECT_THAT([&] { (void)store_run(db, no_log); }, ThrowsMessage<DbError>(HasSubstr("has no raw log")));
+    EXPECT_THAT([&] { (void)test::store_lone_run(db, no_log); }, ThrowsMessage<DbError>(HasSubstr("has no raw log")));
     EXPECT_THAT([&] { (void)load_run(db, 99); }, ThrowsMessage<DbError>(HasSubstr("no run with id 99")));
     EXPECT_THAT([&] { Statement st(db, "SELEC nonsense"); }, ThrowsMessage<DbError>(HasSubstr("cannot prepare 'SELEC nonsense'")));
     Transaction tx(db);
@@ -78,7 +79,7 @@ TEST(Database, ReopensAFileWithoutMigratingTwiceAndRefusesNewerSchemas) {
     std::filesystem::remove(path);
     {
         Database db(path);
-        (void)store_run(db, example_run());
+        (void)test::store_lone_run(db, example_run());
     }
     {
         Database db(path);

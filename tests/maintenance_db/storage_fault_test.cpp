@@ -5,7 +5,7 @@
 // is whole (its two runs with all their samples, raw logs, estimates and its findings) or absent.
 #include "emadiag/db/database.hpp"
 #include "emadiag/db/db_error.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 
 #include "support/stored_run_example.hpp"
 

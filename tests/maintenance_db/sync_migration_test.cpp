@@ -4,7 +4,7 @@
 #include "emadiag/db/database.hpp"
 #include "emadiag/db/db_error.hpp"
 #include "emadiag/db/record_store.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 #include "older_version_file.hpp"
 
 #include <gmock/gmock.h>

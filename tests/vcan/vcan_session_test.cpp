@@ -6,7 +6,7 @@
 #include "can_tool/heartbeat_sender.hpp"
 #include "core/run_csv.hpp"
 #include "emadiag/db/sha256.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 #include "emadiag/can/can_error.hpp"
 #include "emadiag/can/ema_icd.hpp"
 #include "emadiag/can/socketcan_bus.hpp"

@@ -49,7 +49,7 @@ std::string array_element(const std::string& s) {
     return out + '"';
 }
 
-// The station's utc_days (maintenance_db/src/test_session_store.cpp), for the summary terms.
+// The station's utc_days (maintenance_db/src/session_summaries.cpp), for the summary terms.
 std::int64_t days_from_civil(int y, unsigned m, unsigned d) {
     y -= m <= 2 ? 1 : 0;
     const int era = (y >= 0 ? y : y - 399) / 400;

@@ -7,7 +7,7 @@
 #include "emadiag/can/ema_icd.hpp"
 #include "emadiag/db/database.hpp"
 #include "emadiag/db/record_store.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 #include "emadiag/sim/simulator.hpp"
 #include "support/cli_runner.hpp"
 

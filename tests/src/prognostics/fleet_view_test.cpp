@@ -1,7 +1,7 @@
 // The fleet view's fit from the summary sums against fit_linear over the same points (a fast path
 // checked against the slow reference), and the ranking by the RUL lower bound.
 #include "emadiag/db/record_store.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 #include "prognostics/degradation_fit.hpp"
 #include "prognostics/fleet_record.hpp"
 #include "prognostics/fleet_view.hpp"

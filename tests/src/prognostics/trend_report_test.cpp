@@ -4,7 +4,7 @@
 // tail, position or serial.
 #include "core/emadiag_error.hpp"
 #include "emadiag/db/database.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 #include "prognostics/trend_report.hpp"
 #include "prognostics/utc_time.hpp"
 

@@ -2,7 +2,7 @@
 // plots and tables per section, bad numbers named; and the document of a maintenance record on the
 // days axis (sessions in an in-memory database, an exact drift whose crossing is known).
 #include "core/emadiag_error.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 #include "emadiag/db/database.hpp"
 #include "prognostics/fleet_record.hpp"
 #include "prognostics/utc_time.hpp"

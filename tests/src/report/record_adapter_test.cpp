@@ -3,7 +3,7 @@
 // RUL in cycles and days, the crossing of an exact drift, the installation change, the open
 // discovery finding only where it belongs, and every stored string escaped.
 #include "emadiag/db/record_store.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 #include "prognostics/fleet_record.hpp"
 #include "report/html_report.hpp"
 #include "report/record_adapter.hpp"

@@ -4,7 +4,7 @@
 // structures the renderers consume, so a report reads the same from either engine.
 #include "emadiag/db/database.hpp"
 #include "emadiag/db/record_store.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 
 #include <memory>
 #include <optional>
@@ -43,7 +43,7 @@ public:
     [[nodiscard]] virtual std::vector<std::string> record_problems(const std::string& /*tail_number*/) { return {}; }
 };
 
-/// The station's SQLite file (the functions of test_session_store.hpp and record_store.hpp).
+/// The station's SQLite file (the functions of session_store.hpp and record_store.hpp).
 class SqliteRecordSource final : public RecordSource {
 public:
     explicit SqliteRecordSource(Database& db) : db_(db) {}

@@ -1,9 +1,9 @@
 #pragma once
 // The maintenance record of a fleet beyond the sessions themselves: positions, installation
 // changes, discovery findings, the summary tables the fleet view reads, and the check of each
-// tail's hash chain (docs/record-format.md). Sessions are stored by test_session_store.hpp.
+// tail's hash chain (docs/record-format.md). Sessions are stored by session_store.hpp.
 #include "emadiag/db/database.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 
 #include <cstdint>
 #include <optional>

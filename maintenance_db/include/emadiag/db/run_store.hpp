@@ -1,6 +1,7 @@
 #pragma once
-// Runs, their raw logs, samples and estimates, stored under the aircraft's tail number.
-// Every store happens in one transaction: a run is either all there or not there at all.
+// Runs, their raw logs, samples and estimates, stored under the aircraft's tail number. A run is
+// stored with its test session (session_store.hpp), in the session's one transaction: either all
+// there or not there at all.
 #include "emadiag/db/database.hpp"
 
 #include <cstdint>
@@ -25,7 +26,7 @@ struct StoredEstimate {
 };
 
 struct StoredRun {
-    std::int64_t run_id = 0;  ///< set by store_run / load_run
+    std::int64_t run_id = 0;  ///< set by the store / load_run
     std::string tail_number;
     std::string actuator_serial;
     std::string started_utc;  ///< ISO 8601
@@ -41,16 +42,13 @@ struct StoredRun {
     std::string raw_log;         ///< the bytes as received, kept before anything is computed
     std::vector<StoredEstimate> estimates;
     /// The test session the run belongs to; set by load_run / list_runs, empty for a run stored on its
-    /// own. Ignored on input, like run_id: store_run writes NULL, store_test_session the new session's id.
+    /// own (stored before schema version 2 brought sessions). Ignored on input, like run_id: store_test_session
+    /// writes the new session's id.
     std::optional<std::int64_t> session_id;
 };
 
 /// Checks a tail number: 1 to 16 characters of A-Z, 0-9 and '-'. Throws DbError naming it.
 void check_tail_number(const std::string& tail_number);
-
-/// Stores the run, its samples, raw log and estimates in one transaction; returns the run id.
-/// Throws DbError naming the field (and sample index) on invalid input; nothing is written then.
-[[nodiscard]] std::int64_t store_run(Database& db, const StoredRun& run);
 
 /// Loads one run with everything stored for it. Throws DbError when there is no such run.
 [[nodiscard]] StoredRun load_run(Database& db, std::int64_t run_id);

@@ -3,8 +3,9 @@
 // and the upgrade of a version-1 file in place.
 #include "emadiag/db/db_error.hpp"
 #include "emadiag/db/run_store.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 #include "support/db_test_files.hpp"
+#include "support/lone_run.hpp"
 #include "support/stored_run_example.hpp"
 
 #include <gmock/gmock.h>
@@ -205,7 +206,7 @@ TEST(TestSessionStore, RunsStoredOnTheirOwnHaveNoSession) {
     Database db(":memory:");
     StoredRun alone = example_run("dyn");
     alone.session_id = 12345;  // ignored on input, like run_id
-    const auto alone_id = store_run(db, alone);
+    const auto alone_id = test::store_lone_run(db, alone);
     const auto session_id = store_test_session(db, example_session());
 
     EXPECT_EQ(load_run(db, alone_id).session_id, std::nullopt);

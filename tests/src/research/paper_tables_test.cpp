@@ -1,5 +1,5 @@
 // paper-tables: the eta-confound floor and a quick run of every table.
-#include "estimation/paper_tables.hpp"
+#include "research/paper_tables.hpp"
 
 #include "estimation/nn_trainer.hpp"
 

@@ -20,7 +20,7 @@
 #include "diagnosis/session_storage.hpp"
 #include "diagnosis/verdict.hpp"
 
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 
 #include "emadiag/can/can_bus.hpp"
 

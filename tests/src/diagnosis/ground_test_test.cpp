@@ -2,12 +2,12 @@
 // it with separate processes over SocketCAN): verdicts for a healthy and a worn transmission,
 // everything stored under the tail number, and the refusals that must come before anything moves.
 #include "core/emadiag_error.hpp"
-#include "diagnosis/test_run.hpp"
+#include "diagnosis/ground_test.hpp"
 #include "emadiag/can/memory_bus.hpp"
 #include "emadiag/db/db_error.hpp"
 #include "emadiag/db/record_store.hpp"
 #include "emadiag/db/sha256.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 #include "support/node_runner.hpp"
 
 #include <gmock/gmock.h>

@@ -1,4 +1,4 @@
-#include "diagnosis/test_run.hpp"
+#include "diagnosis/ground_test.hpp"
 
 #include "core/run_validity.hpp"
 
@@ -11,10 +11,13 @@
 #include "core/run_summary.hpp"
 #include "emadiag/db/run_store.hpp"
 #include "emadiag/db/sha256.hpp"
-#include "emadiag/db/test_session_store.hpp"
+#include "emadiag/db/session_store.hpp"
 #include "emadiag/io/utc_now.hpp"
 
 #include <ctime>
+#include <filesystem>
+#include <functional>
+#include <optional>
 #include <fstream>
 #include <sstream>
 
@@ -57,6 +60,127 @@ db::StoredRun to_stored(const TestRunRecord& r, const std::string& tail, const s
     s.raw_log_format = "candump";
     s.raw_log = read_bytes(r.log_path);
     return s;
+}
+
+using Say = std::function<void(const std::string&)>;
+
+/// The options checked before anything moves: the phase, the sequences (none listed twice) and the tail number.
+void check_options(const TestRunOptions& options) {
+    if (options.phase != kPhasePreFlight && options.phase != kPhasePostFlight)
+        throw EmadiagError("phase \"" + options.phase + "\": expected " + kPhasePreFlight + " or " + kPhasePostFlight);
+    if (options.sequences.empty()) throw EmadiagError("no test sequence to run");
+    for (std::size_t i = 0; i < options.sequences.size(); ++i)
+        for (std::size_t j = 0; j < i; ++j)
+            if (options.sequences[i] == options.sequences[j])
+                throw EmadiagError("test sequence " + sequence_name(options.sequences[i]) + " is listed twice");
+    db::check_tail_number(options.tail_number);
+}
+
+/// Moves the raw logs recorded in the spool directory to the output directory once the session is
+/// stored (across file systems: copied, then removed from the spool) and points the runs at them.
+void move_logs_out(const SessionSpool& spool, const std::filesystem::path& spool_dir, const TestRunOptions& options, TestRunResult& result,
+                   const Say& say) {
+    for (const auto& l : spool.manifest().logs) {
+        const std::filesystem::path from = spool_dir / l.log_path, to = options.out_dir / l.log_path;
+        std::error_code move_ec;
+        if (!std::filesystem::exists(from, move_ec)) continue;
+        std::filesystem::rename(from, to, move_ec);
+        if (move_ec) {  // another file system: copy, then remove the spool's copy
+            std::filesystem::copy_file(from, to, std::filesystem::copy_options::overwrite_existing, move_ec);
+            if (move_ec) {
+                say("raw log " + from.string() + " stays in the spool directory: it could not be moved to " + to.string() + ": " + move_ec.message());
+                continue;
+            }
+            std::filesystem::remove(from, move_ec);
+        }
+        for (auto& r : result.runs)
+            if (r.log_path == from.string()) r.log_path = to.string();
+    }
+}
+
+/// After the recorder's error: the sequence's partial log, when it holds a run, kept as an
+/// incomplete, invalid run.
+void keep_partial_run(TestRunRecord& rec, const TestRunOptions& options, const std::string& log_name, const std::optional<std::string>& failure,
+                      TestRunResult& result) {
+    try {
+        rec.outcome.run = read_run_candump(rec.log_path);
+        rec.outcome.run.set_meta("log_file", (options.out_dir / log_name).string());
+        rec.outcome.run.set_meta("tail_number", options.tail_number);
+        rec.outcome.run.set_meta("phase", options.phase);
+        rec.outcome.run.set_meta("valid", "false");
+        rec.outcome.run.set_meta("invalid_reason", *failure);
+        rec.outcome.status = "incomplete";
+        rec.outcome.valid = false;
+        rec.outcome.invalid_reason = *failure;
+        result.runs.push_back(std::move(rec));
+    } catch (const std::exception&) {
+        // Nothing was started: the log on disk is all there is, and the error names it.
+    }
+}
+
+/// The progress lines of a recorded sequence: samples and losses, the bus and the heartbeat.
+void say_recording(const TestRunRecord& rec, const Say& say) {
+    const auto& st = rec.outcome.stats;
+    const auto& lp = rec.outcome.loop;
+    std::ostringstream bus_line;
+    bus_line.precision(3);
+    bus_line << "  " << rec.sequence << ": bus " << lp.frames_received << " frames in " << lp.wall_s << " s ("
+             << (lp.wall_s > 0 ? static_cast<double>(lp.frames_received) / lp.wall_s : 0.0) << " frames/s, "
+             << lp.receive_calls << " receive calls), tool CPU "
+             << (lp.frames_received > 0 ? 1e6 * lp.cpu_s / static_cast<double>(lp.frames_received) : 0.0)
+             << " us/frame; heartbeat " << lp.heartbeat.sent << " sent, longest gap "
+             << static_cast<double>(lp.heartbeat.max_gap.count()) / 1000.0 << " ms"
+             << (lp.heartbeat.realtime ? " (SCHED_FIFO)" : " (normal priority)");
+    say("  " + rec.sequence + ": " + rec.outcome.status + ", " + std::to_string(st.samples_complete) + " of " +
+        std::to_string(st.samples_expected) + " samples, " + std::to_string(st.frames_lost) + " frames lost, " +
+        std::to_string(st.crc_failures) + " CRC failures, " + std::to_string(st.duplicates) + " duplicates; raw log " + rec.log_path);
+    say(bus_line.str());
+}
+
+/// What the signals of a valid run say before any estimate: the residual torque T_R of eq. 7 while
+/// moving fast, and the current and travel the sequence took.
+void say_signals(const TestRunRecord& rec, const Say& say) {
+    const RunSummary sum = summarise(rec.outcome.run);
+    std::ostringstream line;
+    line.precision(4);
+    line << "  " << rec.sequence << ": peak current " << sum.peak_current_a << " A, surface " << sum.min_surface_deg << " .. "
+         << sum.max_surface_deg << " deg";
+    if (sum.tr_plateau_down_nm && sum.tr_plateau_up_nm)
+        line << ", T_R (eq. 7) " << *sum.tr_plateau_down_nm << " N m moving down, " << *sum.tr_plateau_up_nm << " N m moving up";
+    say(line.str());
+}
+
+/// The session stored (every attempt's run, the artifacts, the work performed, the verdict), the
+/// spool removed and the raw logs moved out; the receipt goes into `result`.
+void store_result(std::optional<db::Database>& database, SessionSpool& spool, const std::filesystem::path& spool_dir, const TestRunOptions& options,
+                  const std::optional<AugmentedModelUse>& model, TestRunResult& result, const Say& say) {
+    db::StoredTestSession stored = session_parts::to_stored_session(spool.manifest(), result.runs, result.assessment);
+    std::string done;
+    for (const auto& r : result.runs) {
+        if (r.estimates) add_model_artifacts(stored, r.estimates->model_files);
+        done += (done.empty() ? "" : ", ") + r.sequence;
+    }
+    stored.work_performed = "ground test run over CAN (" + options.phase + "): " + (done.empty() ? std::string("no sequence") : done) +
+                            "; estimates (physics, network)" +
+                            (model ? " on the runs corrected by the augmented model " + model->path + " (sha256 " + model->sha256 + ")"
+                                   : std::string()) +
+                            " and verdict " + std::string(to_string(result.assessment.verdict));
+    db::SessionReceipt receipt;
+    try {
+        receipt = db::store_session(*database, stored);
+    } catch (const std::exception& e) {
+        throw EmadiagError(std::string(e.what()) + "; nothing was stored: the session stays spooled in " + spool.path().string() +
+                           " and `emadiag recover --db " + options.db_path + "` (or the next test-run) stores it");
+    }
+    spool.remove();
+    move_logs_out(spool, spool_dir, options, result, say);
+    result.db_session_id = receipt.session_id;
+    result.content_sha256 = receipt.content_sha256;
+    result.installation = receipt.installation;
+    say("stored as test session " + std::to_string(result.db_session_id) + " of " + options.tail_number +
+        (stored.position ? " at " + *stored.position : std::string()) + " in " + options.db_path + " (chain " +
+        receipt.content_sha256.substr(0, 16) + ")");
+    if (receipt.installation) say(describe_installation(*receipt.installation));
 }
 
 }  // namespace
@@ -121,14 +245,7 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
     auto say = [&](const std::string& s) {
         if (options.on_progress) options.on_progress(s);
     };
-    if (options.phase != kPhasePreFlight && options.phase != kPhasePostFlight)
-        throw EmadiagError("phase \"" + options.phase + "\": expected " + kPhasePreFlight + " or " + kPhasePostFlight);
-    if (options.sequences.empty()) throw EmadiagError("no test sequence to run");
-    for (std::size_t i = 0; i < options.sequences.size(); ++i)
-        for (std::size_t j = 0; j < i; ++j)
-            if (options.sequences[i] == options.sequences[j])
-                throw EmadiagError("test sequence " + sequence_name(options.sequences[i]) + " is listed twice");
-    db::check_tail_number(options.tail_number);
+    check_options(options);
     db::StoredTestSession s;
     set_record_info(s, options.record);  // an unknown position, bad cycles or hours: nothing moves
     // The augmented model: missing, unreadable, not a discovery model, a backlash term: nothing moves.
@@ -168,25 +285,6 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
     // The raw logs are recorded inside the spool directory (recover takes no file from elsewhere)
     // and moved to the output directory once the session is stored.
     const std::filesystem::path spool_dir = spool.path().parent_path();
-    const auto move_logs_out = [&] {
-        for (const auto& l : spool.manifest().logs) {
-            const std::filesystem::path from = spool_dir / l.log_path, to = options.out_dir / l.log_path;
-            std::error_code move_ec;
-            if (!std::filesystem::exists(from, move_ec)) continue;
-            std::filesystem::rename(from, to, move_ec);
-            if (move_ec) {  // another file system: copy, then remove the spool's copy
-                std::filesystem::copy_file(from, to, std::filesystem::copy_options::overwrite_existing, move_ec);
-                if (move_ec) {
-                    say("raw log " + from.string() + " stays in the spool directory: it could not be moved to " + to.string() + ": " + move_ec.message());
-                    continue;
-                }
-                std::filesystem::remove(from, move_ec);
-            }
-            for (auto& r : result.runs)
-                if (r.log_path == from.string()) r.log_path = to.string();
-        }
-    };
-
     const std::string stem_prefix = options.tail_number + "_" + compact(result.started_utc) + "_" + options.phase + "_";
     std::uint16_t session_id = options.first_session_id;
     std::optional<std::string> failure;
@@ -225,20 +323,7 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
                 failure = without_prefix(e.what());
                 failed_sequence = rec.sequence;
                 stop = true;
-                try {
-                    rec.outcome.run = read_run_candump(rec.log_path);
-                    rec.outcome.run.set_meta("log_file", (options.out_dir / log_name).string());
-                    rec.outcome.run.set_meta("tail_number", options.tail_number);
-                    rec.outcome.run.set_meta("phase", options.phase);
-                    rec.outcome.run.set_meta("valid", "false");
-                    rec.outcome.run.set_meta("invalid_reason", *failure);
-                    rec.outcome.status = "incomplete";
-                    rec.outcome.valid = false;
-                    rec.outcome.invalid_reason = *failure;
-                    result.runs.push_back(std::move(rec));
-                } catch (const std::exception&) {
-                    // Nothing was started: the log on disk is all there is, and the error names it.
-                }
+                keep_partial_run(rec, options, log_name, failure, result);
                 break;
             }
             rec.outcome.run.set_meta("tail_number", options.tail_number);
@@ -246,33 +331,10 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
             // Where the raw log will be once the session is stored (it is recorded in the spool).
             rec.outcome.run.set_meta("log_file", (options.out_dir / log_name).string());
             write_run_csv_file(rec.csv_path, rec.outcome.run);
-            const auto& st = rec.outcome.stats;
-            const auto& lp = rec.outcome.loop;
-            std::ostringstream bus_line;
-            bus_line.precision(3);
-            bus_line << "  " << rec.sequence << ": bus " << lp.frames_received << " frames in " << lp.wall_s << " s ("
-                     << (lp.wall_s > 0 ? static_cast<double>(lp.frames_received) / lp.wall_s : 0.0) << " frames/s, "
-                     << lp.receive_calls << " receive calls), tool CPU "
-                     << (lp.frames_received > 0 ? 1e6 * lp.cpu_s / static_cast<double>(lp.frames_received) : 0.0)
-                     << " us/frame; heartbeat " << lp.heartbeat.sent << " sent, longest gap "
-                     << static_cast<double>(lp.heartbeat.max_gap.count()) / 1000.0 << " ms"
-                     << (lp.heartbeat.realtime ? " (SCHED_FIFO)" : " (normal priority)");
-            say("  " + rec.sequence + ": " + rec.outcome.status + ", " + std::to_string(st.samples_complete) + " of " +
-                std::to_string(st.samples_expected) + " samples, " + std::to_string(st.frames_lost) + " frames lost, " +
-                std::to_string(st.crc_failures) + " CRC failures, " + std::to_string(st.duplicates) + " duplicates; raw log " + rec.log_path);
-            say(bus_line.str());
+            say_recording(rec, say);
             if (result.actuator_serial.empty()) result.actuator_serial = rec.outcome.run.meta_value("ema_serial_number").value_or("");
             if (rec.outcome.valid) {
-                // What the signals say before any estimate: the residual torque T_R of eq. 7 while
-                // moving fast, and the current and travel the sequence took.
-                const RunSummary sum = summarise(rec.outcome.run);
-                std::ostringstream line;
-                line.precision(4);
-                line << "  " << rec.sequence << ": peak current " << sum.peak_current_a << " A, surface " << sum.min_surface_deg << " .. "
-                     << sum.max_surface_deg << " deg";
-                if (sum.tr_plateau_down_nm && sum.tr_plateau_up_nm)
-                    line << ", T_R (eq. 7) " << *sum.tr_plateau_down_nm << " N m moving down, " << *sum.tr_plateau_up_nm << " N m moving up";
-                say(line.str());
+                say_signals(rec, say);
                 session_parts::estimate(rec, model ? &*model : nullptr);
                 if (!rec.estimate_error.empty()) say("  " + rec.sequence + ": not estimated: " + rec.estimate_error);
             }
@@ -295,7 +357,7 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
         result.assessment.reason = "the " + failed_sequence + " sequence could not be run: " + *failure;
         if (result.runs.empty()) {
             spool.remove();  // nothing was recorded: nothing to store
-            move_logs_out();
+            move_logs_out(spool, spool_dir, options, result, say);
             throw EmadiagError(*failure);
         }
     } else if (result.interrupted) {
@@ -306,33 +368,7 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
     }
     spool.set_state("recorded");
 
-    db::StoredTestSession stored = session_parts::to_stored_session(spool.manifest(), result.runs, result.assessment);
-    std::string done;
-    for (const auto& r : result.runs) {
-        if (r.estimates) add_model_artifacts(stored, r.estimates->model_files);
-        done += (done.empty() ? "" : ", ") + r.sequence;
-    }
-    stored.work_performed = "ground test run over CAN (" + options.phase + "): " + (done.empty() ? std::string("no sequence") : done) +
-                            "; estimates (physics, network)" +
-                            (model ? " on the runs corrected by the augmented model " + model->path + " (sha256 " + model->sha256 + ")"
-                                   : std::string()) +
-                            " and verdict " + std::string(to_string(result.assessment.verdict));
-    db::SessionReceipt receipt;
-    try {
-        receipt = db::store_session(*database, stored);
-    } catch (const std::exception& e) {
-        throw EmadiagError(std::string(e.what()) + "; nothing was stored: the session stays spooled in " + spool.path().string() +
-                           " and `emadiag recover --db " + options.db_path + "` (or the next test-run) stores it");
-    }
-    spool.remove();
-    move_logs_out();
-    result.db_session_id = receipt.session_id;
-    result.content_sha256 = receipt.content_sha256;
-    result.installation = receipt.installation;
-    say("stored as test session " + std::to_string(result.db_session_id) + " of " + options.tail_number +
-        (stored.position ? " at " + *stored.position : std::string()) + " in " + options.db_path + " (chain " +
-        receipt.content_sha256.substr(0, 16) + ")");
-    if (receipt.installation) say(describe_installation(*receipt.installation));
+    store_result(database, spool, spool_dir, options, model, result, say);
     if (failure) throw EmadiagError(*failure + " (the " + std::to_string(result.runs.size()) + " run(s) recorded are stored as test session " +
                                     std::to_string(result.db_session_id) + ", verdict NO_TEST)");
     return result;

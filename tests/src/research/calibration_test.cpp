@@ -3,7 +3,7 @@
 // test checks a smaller seeded set against limits wide enough for its binomial spread, plus the
 // accuracy goals the estimator owns and the case-A floor.
 #include "estimation/health_estimate.hpp"
-#include "estimation/physics_calibration.hpp"
+#include "research/physics_calibration.hpp"
 
 #include <gtest/gtest.h>
 

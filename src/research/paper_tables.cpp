@@ -1,4 +1,4 @@
-#include "estimation/paper_tables.hpp"
+#include "research/paper_tables.hpp"
 
 #include "core/emadiag_error.hpp"
 #include "estimation/dataset.hpp"
@@ -290,6 +290,129 @@ void ten_predictions(std::ostringstream& md, const NetRow& row, const std::vecto
     }
 }
 
+/// The network rows of every table, for the goals and the calibration summary.
+struct TableRows {
+    const NetRow &a_none, &a_typ;
+    const std::optional<NetRow> &b5_none, &b5_typ;
+    const NetRow &plus_none, &plus_typ, &smooth_none, &smooth_typ, &ax_none, &ax_typ, &sw_none, &sw_typ;
+};
+
+/// Table 2's paragraph on the eta confound floor of case A.
+void confound_floor_paragraph(std::ostringstream& md, const PaperTablesOptions& options, const Dataset& a_clean, const NetRow& a_none,
+                              const ConfoundFloor& floor) {
+    md << "**The eta confound floor.** In case A the load is constant (H = 5 N m, F_R = " << fix(kCaseAHingeNm / a_clean.constants.tau * 1e3, 3)
+       << " mN m), so eq. (5) gives T_R = FDJ + c(eta) |F_R| while slipping, with c = 1/eta_O - 1 opposing and 1 - eta_A "
+          "aiding; eq. (4) makes the two equal to within "
+       << sci(floor.c_difference_max)
+       << " N m, far below any measurement. FDJ and eta trade off: the best possible predictor is E[FDJ | s] with s = "
+          "FDJ + c(eta)|F_R|, eta_A uniform and unobserved. Its normalised MSE (Monte Carlo, "
+       << (options.quick ? 2000 : kFloorSamples) << " draws, posterior on a " << kFloorGrid
+       << "-point eta_A grid) is the floor: **" << sci(floor.mse) << "**. Goal: within 1.5x of it, i.e. <= "
+       << sci(1.5 * floor.mse) << ". Network, noise none: " << sci(a_none.rep.mse.test) << " = "
+       << fix(a_none.rep.mse.test / floor.mse, 2) << "x the floor; physics: " << sci(a_none.physics.mse) << " = "
+       << fix(a_none.physics.mse / floor.mse, 2) << "x. (With " << a_none.rep.split.test.size()
+       << " test runs, the sampling spread of a test MSE is itself about +/-" << fix(100.0 * std::sqrt(2.0 / static_cast<double>(a_none.rep.split.test.size())), 0)
+       << " %.)\n\n";
+}
+
+/// The goals of issue 4 part 7 against the best method of each case.
+void goals_section(std::ostringstream& md, const TableRows& rows, const ConfoundFloor& floor) {
+    const NetRow &a_none = rows.a_none, &plus_none = rows.plus_none, &plus_typ = rows.plus_typ, &smooth_none = rows.smooth_none,
+                 &smooth_typ = rows.smooth_typ, &ax_none = rows.ax_none;
+    const std::optional<NetRow> &b5_none = rows.b5_none, &b5_typ = rows.b5_typ;
+    const auto best = [](std::initializer_list<std::pair<const char*, double>> c) {
+        std::pair<std::string, double> b{"none", std::numeric_limits<double>::infinity()};
+        for (const auto& [n, v] : c) {
+            if (std::isfinite(v) && v < b.second) b = {n, v};
+        }
+        return b;
+    };
+    const auto b_best_none = best({{"network (paper setting)", b5_none->rep.mse.test},
+                                   {"network+", plus_none.rep.mse.test},
+                                   {"network~", smooth_none.rep.mse.test},
+                                   {"physics", b5_none->physics.mse}});
+    const auto b_best_typ = best({{"network (paper setting)", b5_typ->rep.mse.test},
+                                  {"network+", plus_typ.rep.mse.test},
+                                  {"network~", smooth_typ.rep.mse.test},
+                                  {"physics", b5_typ->physics.mse}});
+    const auto a_best = best({{"network", a_none.rep.mse.test}, {"physics", a_none.physics.mse}});
+    const double ax_eta_phys = ax_none.physics.mse_per_output.size() > 1 ? ax_none.physics.mse_per_output[1]
+                                                                          : std::numeric_limits<double>::quiet_NaN();
+    const auto ax_best = best({{"network", ax_none.rep.mse.test_per_output[1]}, {"physics", ax_eta_phys}});
+    const auto verdict = [](bool met) { return met ? "met" : "**not met**"; };
+    md << "## Goals (issue 4 part 7)\n\n"
+       << "| What | The paper | Goal | Ours (best method) | Met |\n|---|---|---|---|---|\n"
+       << "| Case B, paper's setting, noise none | 2.601e-06 | <= 2.6e-07 | " << sci(b_best_none.second) << " ("
+       << b_best_none.first << ") | " << verdict(b_best_none.second <= 2.6e-7) << " |\n"
+       << "| Case B, paper's setting, noise typical | - | report | " << sci(b_best_typ.second) << " (" << b_best_typ.first
+       << ") | - |\n"
+       << "| Case A FDJ, noise none | 2.453e-04 | <= 1.5 x floor = " << sci(1.5 * floor.mse) << " | " << sci(a_best.second)
+       << " (" << a_best.first << "; " << fix(a_best.second / floor.mse, 2) << "x floor) | "
+       << verdict(a_best.second <= 1.5 * floor.mse) << " |\n"
+       << "| A-ext eta_O, noise none | 5.542e-04 (both outputs) | <= 5.5e-06 | " << sci(ax_best.second) << " ("
+       << ax_best.first << ") | " << verdict(ax_best.second <= 5.5e-6) << " |\n\n";
+}
+
+/// The calibration of every network's uncertainty: its test runs and a fresh dataset per case.
+void calibration_section(std::ostringstream& md, Context& cx, const TableRows& rows) {
+    const PaperTablesOptions& options = cx.opt;
+    const NetRow &a_none = rows.a_none, &a_typ = rows.a_typ, &plus_none = rows.plus_none, &plus_typ = rows.plus_typ,
+                 &smooth_none = rows.smooth_none, &smooth_typ = rows.smooth_typ, &ax_none = rows.ax_none, &ax_typ = rows.ax_typ,
+                 &sw_none = rows.sw_none, &sw_typ = rows.sw_typ;
+    const std::optional<NetRow> &b5_none = rows.b5_none, &b5_typ = rows.b5_typ;
+    // Calibration summary over every network row of the paper's settings.
+    md << "## Calibration of the network's uncertainty\n\n"
+       << "Each network's per-output standard error is calibrated on its validation runs (split-conformal 95 % "
+          "quantile of |residual| / 1.96) and checked on its test runs, which it never saw. Goal: the 95 % "
+          "intervals cover the truth in 90 to 98 % of test runs.\n\n"
+       << "A second check uses a fresh dataset of " << cx.runs(1000)
+       << " runs per case (another seed), simulated after training.\n\n"
+       << "| Network | Test pairs | Coverage, none | Coverage, typical | Fresh pairs | Fresh coverage, none | Fresh coverage, typical |\n"
+          "|---|---|---|---|---|---|---|\n";
+    long fresh_covered = 0, fresh_pairs = 0;
+    std::map<std::string, std::pair<Dataset, Dataset>> fresh;  // key case/sequence: clean, typical
+    const auto cov_row = [&](const char* name, const NetRow& n, const NetRow& t) {
+        const std::string key = n.rep.model.spec.load_case + "/" + n.rep.model.spec.sequence;
+        if (fresh.find(key) == fresh.end()) {
+            DatasetSpec spec;
+            spec.load_case = sim::parse_load_case(n.rep.model.spec.load_case);
+            spec.sequence = sim::parse_sequence(n.rep.model.spec.sequence);
+            spec.count = cx.runs(1000);
+            spec.seed = options.seed + 7777 + fnv1a(key) % 1000;
+            Dataset clean = generate_dataset(spec, options.threads);
+            Dataset noisy = clean.with_noise(sim::NoiseProfile::Typical);
+            fresh.emplace(key, std::make_pair(std::move(clean), std::move(noisy)));
+        }
+        const auto& [clean, noisy] = fresh.at(key);
+        const FreshCheck fn = fresh_check(n.rep.model, clean, options.threads);
+        const FreshCheck ft = fresh_check(t.rep.model, noisy, options.threads);
+        fresh_covered += std::lround(fn.coverage95 * static_cast<double>(fn.pairs)) +
+                         std::lround(ft.coverage95 * static_cast<double>(ft.pairs));
+        fresh_pairs += fn.pairs + ft.pairs;
+        md << "| " << name << " | " << n.rep.test_predicted.size() << " | " << pct(n.rep.test_coverage95) << " | "
+           << pct(t.rep.test_coverage95) << " | " << fn.pairs << " | " << pct(fn.coverage95) << " | "
+           << pct(ft.coverage95) << " |\n";
+    };
+    cov_row("Table 2 (case A)", a_none, a_typ);
+    cov_row("Table 5 (case B)", *b5_none, *b5_typ);
+    cov_row("Network+ (case B)", plus_none, plus_typ);
+    cov_row("Network~ (case B)", smooth_none, smooth_typ);
+    cov_row("Table 7 (A-ext)", ax_none, ax_typ);
+    cov_row("Table 8 (sweep)", sw_none, sw_typ);
+    {
+        double covered = 0, pairs = 0;
+        const std::vector<const NetRow*> all = {&a_none, &a_typ, &*b5_none, &*b5_typ, &plus_none, &plus_typ, &smooth_none, &smooth_typ, &ax_none, &ax_typ, &sw_none, &sw_typ};
+        for (const NetRow* r : all) {
+            const auto n = static_cast<double>(r->rep.test_predicted.size());
+            covered += r->rep.test_coverage95 * n;
+            pairs += n;
+        }
+        md << "| **All of the above, pooled (none and typical)** | " << static_cast<long>(pairs) << " | "
+           << pct(covered / pairs) << " | | " << fresh_pairs << " | "
+           << pct(static_cast<double>(fresh_covered) / static_cast<double>(fresh_pairs)) << " | |\n\n";
+    }
+}
+
 }  // namespace
 
 ConfoundFloor case_a_fdj_floor(double hinge_moment_nm, double tau, int samples, std::uint64_t seed) {
@@ -360,19 +483,7 @@ std::string paper_tables_markdown(const PaperTablesOptions& options, const Paper
        << " neurons)\n\n";
     const double paper2[3] = {2.417e-4, 2.433e-4, 2.453e-4};
     performance_table(md, paper2, a_none, a_typ);
-    md << "**The eta confound floor.** In case A the load is constant (H = 5 N m, F_R = " << fix(kCaseAHingeNm / a_clean.constants.tau * 1e3, 3)
-       << " mN m), so eq. (5) gives T_R = FDJ + c(eta) |F_R| while slipping, with c = 1/eta_O - 1 opposing and 1 - eta_A "
-          "aiding; eq. (4) makes the two equal to within "
-       << sci(floor.c_difference_max)
-       << " N m, far below any measurement. FDJ and eta trade off: the best possible predictor is E[FDJ | s] with s = "
-          "FDJ + c(eta)|F_R|, eta_A uniform and unobserved. Its normalised MSE (Monte Carlo, "
-       << (options.quick ? 2000 : kFloorSamples) << " draws, posterior on a " << kFloorGrid
-       << "-point eta_A grid) is the floor: **" << sci(floor.mse) << "**. Goal: within 1.5x of it, i.e. <= "
-       << sci(1.5 * floor.mse) << ". Network, noise none: " << sci(a_none.rep.mse.test) << " = "
-       << fix(a_none.rep.mse.test / floor.mse, 2) << "x the floor; physics: " << sci(a_none.physics.mse) << " = "
-       << fix(a_none.physics.mse / floor.mse, 2) << "x. (With " << a_none.rep.split.test.size()
-       << " test runs, the sampling spread of a test MSE is itself about +/-" << fix(100.0 * std::sqrt(2.0 / static_cast<double>(a_none.rep.split.test.size())), 0)
-       << " %.)\n\n";
+    confound_floor_paragraph(md, options, a_clean, a_none, floor);
     md << "## Table 3: case A, ten random test predictions (noise none)\n\n";
     ten_predictions(md, a_none,
                     {{{0.9782, 0.9792, 0.11}, {0.8399, 0.8442, 0.50}, {0.2670, 0.2722, 1.98}, {0.2687, 0.2614, 2.73},
@@ -470,90 +581,9 @@ std::string paper_tables_markdown(const PaperTablesOptions& options, const Paper
     const double paper8[3] = {3.349e-6, 3.296e-6, 2.344e-6};
     performance_table(md, paper8, sw_none, sw_typ);
 
-    // ---- Goals.
-    const auto best = [](std::initializer_list<std::pair<const char*, double>> c) {
-        std::pair<std::string, double> b{"none", std::numeric_limits<double>::infinity()};
-        for (const auto& [n, v] : c) {
-            if (std::isfinite(v) && v < b.second) b = {n, v};
-        }
-        return b;
-    };
-    const auto b_best_none = best({{"network (paper setting)", b5_none->rep.mse.test},
-                                   {"network+", plus_none.rep.mse.test},
-                                   {"network~", smooth_none.rep.mse.test},
-                                   {"physics", b5_none->physics.mse}});
-    const auto b_best_typ = best({{"network (paper setting)", b5_typ->rep.mse.test},
-                                  {"network+", plus_typ.rep.mse.test},
-                                  {"network~", smooth_typ.rep.mse.test},
-                                  {"physics", b5_typ->physics.mse}});
-    const auto a_best = best({{"network", a_none.rep.mse.test}, {"physics", a_none.physics.mse}});
-    const double ax_eta_phys = ax_none.physics.mse_per_output.size() > 1 ? ax_none.physics.mse_per_output[1]
-                                                                          : std::numeric_limits<double>::quiet_NaN();
-    const auto ax_best = best({{"network", ax_none.rep.mse.test_per_output[1]}, {"physics", ax_eta_phys}});
-    const auto verdict = [](bool met) { return met ? "met" : "**not met**"; };
-    md << "## Goals (issue 4 part 7)\n\n"
-       << "| What | The paper | Goal | Ours (best method) | Met |\n|---|---|---|---|---|\n"
-       << "| Case B, paper's setting, noise none | 2.601e-06 | <= 2.6e-07 | " << sci(b_best_none.second) << " ("
-       << b_best_none.first << ") | " << verdict(b_best_none.second <= 2.6e-7) << " |\n"
-       << "| Case B, paper's setting, noise typical | - | report | " << sci(b_best_typ.second) << " (" << b_best_typ.first
-       << ") | - |\n"
-       << "| Case A FDJ, noise none | 2.453e-04 | <= 1.5 x floor = " << sci(1.5 * floor.mse) << " | " << sci(a_best.second)
-       << " (" << a_best.first << "; " << fix(a_best.second / floor.mse, 2) << "x floor) | "
-       << verdict(a_best.second <= 1.5 * floor.mse) << " |\n"
-       << "| A-ext eta_O, noise none | 5.542e-04 (both outputs) | <= 5.5e-06 | " << sci(ax_best.second) << " ("
-       << ax_best.first << ") | " << verdict(ax_best.second <= 5.5e-6) << " |\n\n";
-
-    // Calibration summary over every network row of the paper's settings.
-    md << "## Calibration of the network's uncertainty\n\n"
-       << "Each network's per-output standard error is calibrated on its validation runs (split-conformal 95 % "
-          "quantile of |residual| / 1.96) and checked on its test runs, which it never saw. Goal: the 95 % "
-          "intervals cover the truth in 90 to 98 % of test runs.\n\n"
-       << "A second check uses a fresh dataset of " << cx.runs(1000)
-       << " runs per case (another seed), simulated after training.\n\n"
-       << "| Network | Test pairs | Coverage, none | Coverage, typical | Fresh pairs | Fresh coverage, none | Fresh coverage, typical |\n"
-          "|---|---|---|---|---|---|---|\n";
-    long fresh_covered = 0, fresh_pairs = 0;
-    std::map<std::string, std::pair<Dataset, Dataset>> fresh;  // key case/sequence: clean, typical
-    const auto cov_row = [&](const char* name, const NetRow& n, const NetRow& t) {
-        const std::string key = n.rep.model.spec.load_case + "/" + n.rep.model.spec.sequence;
-        if (fresh.find(key) == fresh.end()) {
-            DatasetSpec spec;
-            spec.load_case = sim::parse_load_case(n.rep.model.spec.load_case);
-            spec.sequence = sim::parse_sequence(n.rep.model.spec.sequence);
-            spec.count = cx.runs(1000);
-            spec.seed = options.seed + 7777 + fnv1a(key) % 1000;
-            Dataset clean = generate_dataset(spec, options.threads);
-            Dataset noisy = clean.with_noise(sim::NoiseProfile::Typical);
-            fresh.emplace(key, std::make_pair(std::move(clean), std::move(noisy)));
-        }
-        const auto& [clean, noisy] = fresh.at(key);
-        const FreshCheck fn = fresh_check(n.rep.model, clean, options.threads);
-        const FreshCheck ft = fresh_check(t.rep.model, noisy, options.threads);
-        fresh_covered += std::lround(fn.coverage95 * static_cast<double>(fn.pairs)) +
-                         std::lround(ft.coverage95 * static_cast<double>(ft.pairs));
-        fresh_pairs += fn.pairs + ft.pairs;
-        md << "| " << name << " | " << n.rep.test_predicted.size() << " | " << pct(n.rep.test_coverage95) << " | "
-           << pct(t.rep.test_coverage95) << " | " << fn.pairs << " | " << pct(fn.coverage95) << " | "
-           << pct(ft.coverage95) << " |\n";
-    };
-    cov_row("Table 2 (case A)", a_none, a_typ);
-    cov_row("Table 5 (case B)", *b5_none, *b5_typ);
-    cov_row("Network+ (case B)", plus_none, plus_typ);
-    cov_row("Network~ (case B)", smooth_none, smooth_typ);
-    cov_row("Table 7 (A-ext)", ax_none, ax_typ);
-    cov_row("Table 8 (sweep)", sw_none, sw_typ);
-    {
-        double covered = 0, pairs = 0;
-        const std::vector<const NetRow*> all = {&a_none, &a_typ, &*b5_none, &*b5_typ, &plus_none, &plus_typ, &smooth_none, &smooth_typ, &ax_none, &ax_typ, &sw_none, &sw_typ};
-        for (const NetRow* r : all) {
-            const auto n = static_cast<double>(r->rep.test_predicted.size());
-            covered += r->rep.test_coverage95 * n;
-            pairs += n;
-        }
-        md << "| **All of the above, pooled (none and typical)** | " << static_cast<long>(pairs) << " | "
-           << pct(covered / pairs) << " | | " << fresh_pairs << " | "
-           << pct(static_cast<double>(fresh_covered) / static_cast<double>(fresh_pairs)) << " | |\n\n";
-    }
+    const TableRows rows{a_none, a_typ, b5_none, b5_typ, plus_none, plus_typ, smooth_none, smooth_typ, ax_none, ax_typ, sw_none, sw_typ};
+    goals_section(md, rows, floor);
+    calibration_section(md, cx, rows);
     if (!b5_none->physics.first_failure.empty() || !a_none.physics.first_failure.empty()) {
         md << "Physics estimator failures (first message): " << b5_none->physics.first_failure << " "
            << a_none.physics.first_failure << "\n\n";

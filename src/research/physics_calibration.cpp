@@ -1,4 +1,4 @@
-#include "estimation/physics_calibration.hpp"
+#include "research/physics_calibration.hpp"
 
 #include "core/emadiag_error.hpp"
 #include "core/sim_run.hpp"

@@ -2,7 +2,8 @@
 // Accuracy and calibration of the physics estimator on seeded simulated runs (issue 4 goals):
 // the normalised test MSE in the space of ema-reference.md section 8, relative errors, and the
 // coverage of the 95 % intervals (+/-1.96 se), which must lie in [kCoverageMin, kCoverageMax].
-// Used by tests/src/estimation/calibration_test.cpp and bench/calibration_bench.cpp.
+// Research code (src/research, library emadiag_research): used by tests/src/research/calibration_test.cpp
+// and bench/calibration_bench.cpp.
 #include "emadiag/sim/simulator.hpp"
 
 #include <cstdint>
