@@ -73,7 +73,7 @@ int main(int argc, char** argv) {
             a.sequence = k == 0 ? "dyn" : "brk";
             a.valid = true;
             try {
-                a.estimates = estimate_run(make_run(configs[k][j], results[k][j]));
+                a.estimates = estimate_run(check_run(make_run(configs[k][j], results[k][j])));
             } catch (const std::exception& e) {
                 a.valid = false;
                 a.invalid_reason = e.what();

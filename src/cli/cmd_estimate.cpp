@@ -29,6 +29,7 @@
 #include <iomanip>
 #include <iostream>
 #include <sstream>
+#include <utility>
 
 namespace emadiag::cli {
 namespace {
@@ -55,6 +56,23 @@ std::string fmt(double v, int digits) {
     std::ostringstream os;
     os << std::setprecision(digits) << v;
     return os.str();
+}
+
+/// The run read from `path`, checked where it enters (estimation/run_checks.hpp); a problem in a
+/// sample row also says which file line holds that row.
+CheckedRun checked_run_of_file(const std::string& path, Run run) {
+    try {
+        return check_run(std::move(run));
+    } catch (const EmadiagError& e) {
+        // Rows are numbered in sample order; say where they are in a CSV file.
+        const auto line = first_data_line(path);
+        if (!line) throw;
+        std::string msg = e.what();
+        const std::string prefix = "[emadiag] ";
+        if (msg.rfind(prefix, 0) == 0) msg.erase(0, prefix.size());
+        throw EmadiagError(msg + "\n  (" + path + ": sample row 1 is line " + std::to_string(*line) +
+                           ", so sample row N is line N + " + std::to_string(*line - 1) + ")");
+    }
 }
 
 /// The loud warning for a run that may give no verdict, printed before and after the estimates.
@@ -148,20 +166,8 @@ const bool registered = register_command(Command{
                                           "an augmented model JSON from `emadiag discover` (its terms are removed from the run first)");
         sub.add_flag("--json", *json, "Print the stable JSON schema of docs/estimate-json.md");
         return [path, model, json] {
-            const Run run = read_run_any(*path);
-            try {
-                check_run(run);
-            } catch (const EmadiagError& e) {
-                // Rows are numbered in sample order; say where they are in a CSV file.
-                const auto line = first_data_line(*path);
-                if (!line) throw;
-                std::string msg = e.what();
-                const std::string prefix = "[emadiag] ";
-                if (msg.rfind(prefix, 0) == 0) msg.erase(0, prefix.size());
-                throw EmadiagError(msg + "\n  (" + *path + ": sample row 1 is line " +
-                                         std::to_string(*line) + ", so sample row N is line N + " +
-                                         std::to_string(*line - 1) + ")");
-            }
+            const CheckedRun checked = checked_run_of_file(*path, read_run_any(*path));
+            const Run& run = checked.run();
             // Only a complete, valid run may give a verdict (core/run_validity.hpp): estimates of any
             // other are printed with a warning on both streams (stderr first, before anything can fail).
             const RunValidity validity = run_validity(run);
@@ -190,7 +196,9 @@ const bool registered = register_command(Command{
                     network_model.reset();  // the network: a shipped model for the run's case
                 }
             }
-            RunEstimates out = estimate_run(corrected ? *corrected : run, network_model);
+            // The corrected run is a new run: it is checked as it is made.
+            RunEstimates out = corrected ? estimate_run(check_run(std::move(*corrected)), network_model)
+                                         : estimate_run(checked, network_model);
             if (corrected) {
                 out.model_files.insert(out.model_files.begin(), *model);
                 out.notes.insert(out.notes.begin(), model_note);

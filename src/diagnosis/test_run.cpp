@@ -65,7 +65,7 @@ namespace session_parts {
 
 void estimate(TestRunRecord& rec, const AugmentedModelUse* model) {
     try {
-        rec.estimates = model != nullptr ? estimate_with_augmented_model(rec.outcome.run, *model) : estimate_run(rec.outcome.run);
+        rec.estimates = model != nullptr ? estimate_with_augmented_model(rec.outcome.run, *model) : estimate_run(check_run(rec.outcome.run));
     } catch (const EmadiagError& e) {
         rec.estimate_error = e.what();
     }

@@ -2,6 +2,7 @@
 
 #include "core/emadiag_error.hpp"
 #include "estimation/health_estimate.hpp"
+#include "estimation/run_checks.hpp"
 
 #include <sstream>
 #include <utility>
@@ -15,7 +16,7 @@ AssessedRun assess_run(const Run& run, std::string sequence, bool valid, std::st
     a.invalid_reason = std::move(invalid_reason);
     if (!a.valid) return a;
     try {
-        a.estimates = estimate_run(run);
+        a.estimates = estimate_run(check_run(run));  // the run enters the analysis here
     } catch (const EmadiagError& e) {
         a.valid = false;
         a.invalid_reason = std::string("not estimated: ") + e.what();

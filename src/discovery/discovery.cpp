@@ -1086,7 +1086,8 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
         windowed.notes.push_back(windowed.analysis_text());
         return windowed;
     }
-    const RunSignals s = run_signals(run);
+    const CheckedRun checked = check_run(run);  // the run (or its window) enters the analysis here
+    const RunSignals s = run_signals(checked);
     DiscoveryReport rep;
     rep.load_case = run.load_case;
     rep.sequence = run.sequence;
@@ -1095,7 +1096,7 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
     rep.analysed_end_s = run.samples.empty() ? 0.0 : run.samples.back().t_s;
 
     // 1. Baseline: datasheet + the health the run identifies.
-    const HealthEstimate est = estimate_physics(run);
+    const HealthEstimate est = estimate_physics(checked);
     sim::EmaParams p = resim_config(run, sim::EmaParams::datasheet()).params;
     auto& health = rep.model.health;
     health.push_back(health_from(est, kParamFdj, p.fdj_nm));

@@ -22,8 +22,10 @@ std::size_t RunSignals::slipping_count() const {
     return n;
 }
 
-RunSignals run_signals(const Run& run) {
-    check_run(run);
+RunSignals run_signals(const Run& run) { return run_signals(check_run(run)); }
+
+RunSignals run_signals(const CheckedRun& checked) {
+    const Run& run = checked.run();
     RunSignals s;
     s.k_t_nm_per_a = run.constants.k_t_nm_per_a;
     s.j_kgm2 = run.constants.j_kgm2;

@@ -53,7 +53,7 @@ CalibrationResult evaluate_physics(const CalibrationSpec& spec) {
     for (std::size_t i = 0; i < results.size(); ++i) {
         HealthEstimate est;
         try {
-            est = estimate_physics(make_run(configs[i], results[i]));
+            est = estimate_physics(check_run(make_run(configs[i], results[i])));
         } catch (const std::exception& e) {
             ++out.failures;
             out.failure_messages.push_back("run " + std::to_string(i) + ": " + e.what());

@@ -203,8 +203,8 @@ HealthEstimate estimate_brk(const Run& run) {
 
 }  // namespace
 
-HealthEstimate estimate_physics(const Run& run) {
-    check_run(run);
+HealthEstimate estimate_physics(const CheckedRun& checked) {
+    const Run& run = checked.run();
     if (run.sequence == "brk") return estimate_brk(run);
     return estimate_dyn(run);
 }

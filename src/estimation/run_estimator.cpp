@@ -44,10 +44,10 @@ std::optional<std::string> shipped_model_for(const Run& run, std::vector<std::st
     return std::nullopt;
 }
 
-RunEstimates estimate_run(const Run& run, const std::optional<std::string>& model_file) {
-    check_run(run);
+RunEstimates estimate_run(const CheckedRun& checked, const std::optional<std::string>& model_file) {
+    const Run& run = checked.run();
     RunEstimates out;
-    out.estimates.push_back(estimate_physics(run));
+    out.estimates.push_back(estimate_physics(checked));
     std::optional<std::string> mfile = model_file;
     if (!mfile) mfile = shipped_model_for(run, out.notes);
     if (mfile) {
