@@ -116,13 +116,13 @@ Run SessionDecoder::build_run(const std::string& source) const {
     const sim::Sequence seq = start_->sequence == can::icd::TestSequence::Brk ? sim::Sequence::Brk : sim::Sequence::Dyn;
     Run run;
     run.constants = RunConstants{id.k_t_nm_per_a, id.j_kgm2, id.tau, id.sample_period_s};
-    run.sequence = sim::to_string(seq);
-    run.load_case = "A";
+    run.sequence = seq;
+    run.load_case = sim::LoadCase::A;
     if (last_status_) {
         switch (last_status_->load_case) {
-            case can::icd::LoadCase::A: run.load_case = "A"; break;
-            case can::icd::LoadCase::AExt: run.load_case = "A-ext"; break;
-            case can::icd::LoadCase::B: run.load_case = "B"; break;
+            case can::icd::LoadCase::A: run.load_case = sim::LoadCase::A; break;
+            case can::icd::LoadCase::AExt: run.load_case = sim::LoadCase::AExt; break;
+            case can::icd::LoadCase::B: run.load_case = sim::LoadCase::B; break;
         }
     }
     const SessionStats st = stats();

@@ -81,7 +81,7 @@ std::string invalid_warning(const RunValidity& v) {
 }
 
 void print_text(std::ostream& os, const std::string& path, const Run& run, const RunValidity& validity, const RunEstimates& out) {
-    os << "run " << io::escape_text(path) << ": case " << io::escape_text(run.load_case) << ", sequence " << io::escape_text(run.sequence) << ", "
+    os << "run " << io::escape_text(path) << ": case " << sim::to_string(run.load_case) << ", sequence " << sim::to_string(run.sequence) << ", "
        << run.samples.size() << " samples\n";
     if (!validity.valid) os << invalid_warning(validity) << '\n';
     for (const auto& h : out.estimates) {
@@ -125,7 +125,7 @@ nlohmann::json to_json(const std::string& path, const Run& run, const RunValidit
     nlohmann::json j;
     j["schema"] = "emadiag-estimate";
     j["version"] = kEstimateJsonVersion;
-    j["run"] = {{"path", path}, {"case", run.load_case}, {"sequence", run.sequence}, {"samples", run.samples.size()},
+    j["run"] = {{"path", path}, {"case", sim::to_string(run.load_case)}, {"sequence", sim::to_string(run.sequence)}, {"samples", run.samples.size()},
                 {"valid", validity.valid}};
     if (!validity.valid) j["run"]["invalid_reason"] = validity.reason;
     j["estimates"] = nlohmann::json::array();

@@ -20,8 +20,10 @@ db::StoredRun to_stored_run(const Run& run, const std::string& tail, const std::
     s.actuator_serial = run.meta_value("ema_serial_number").value_or("");
     s.started_utc = started_utc;
     s.source = run.meta_value("source").value_or("");
-    s.load_case = run.load_case;
-    s.sequence = run.sequence;
+    // The database's text, by the one printer. A run with no case in its metadata is a log from which
+    // no run could be decoded (diagnosis/session_spool.cpp): its case is unknown, stored empty.
+    s.load_case = run.meta_value("case") ? sim::to_string(run.load_case) : std::string();
+    s.sequence = sim::to_string(run.sequence);
     s.k_t_nm_per_a = run.constants.k_t_nm_per_a;
     s.j_kgm2 = run.constants.j_kgm2;
     s.tau = run.constants.tau;

@@ -902,7 +902,7 @@ nlohmann::json DiscoveryReport::to_json() const {
     nlohmann::json j;
     j["schema"] = "emadiag-discover";
     j["version"] = kModelJsonVersion;
-    j["run"] = {{"case", load_case}, {"sequence", sequence}, {"samples", samples}, {"total_samples", total_samples}};
+    j["run"] = {{"case", sim::to_string(load_case)}, {"sequence", sim::to_string(sequence)}, {"samples", samples}, {"total_samples", total_samples}};
     if (total_samples > samples) j["run"]["analysed"] = analysis_text();
     j["added_effects"] = added_effects();
     j["baseline_health"] = nlohmann::json::object();
@@ -1138,7 +1138,7 @@ DiscoveryReport discover(const Run& run, const DiscoveryOptions& options) {
     const std::vector<char> mask = comparison_mask(s, base_sim);
     const auto compared = static_cast<std::size_t>(std::count(mask.begin(), mask.end(), char{1}));
     if (compared < kMinScreenSamples) {
-        throw EmadiagError("discovery: the " + run.sequence + " run has " + std::to_string(compared) +
+        throw EmadiagError("discovery: the " + sim::to_string(run.sequence) + " run has " + std::to_string(compared) +
                            " comparison samples (slipping in the run and the model); at least " +
                            std::to_string(kMinScreenSamples) +
                            " are needed (a BRK run barely moves: use a DYN or sweep run; given with a DYN run of the same actuator, "

@@ -171,8 +171,8 @@ sim::SimConfig resim_config(const Run& run, const sim::EmaParams& params) {
     c.params.k_t_nm_per_a = run.constants.k_t_nm_per_a;
     c.params.j_kgm2 = run.constants.j_kgm2;
     c.params.tau = run.constants.tau;
-    c.load_case = sim::parse_load_case(run.load_case);
-    c.sequence = sim::parse_sequence(run.sequence);
+    c.load_case = run.load_case;
+    c.sequence = run.sequence;
     c.noise = sim::NoiseProfile::None;
     c.duration_s = static_cast<double>(run.samples.size()) * sim::kSamplePeriodS;
     return c;

@@ -108,8 +108,8 @@ Run Dataset::run(std::size_t i) const {
     }
     Run r;
     r.constants = constants;
-    r.load_case = sim::to_string(spec.load_case);
-    r.sequence = sim::to_string(spec.sequence);
+    r.load_case = spec.load_case;
+    r.sequence = spec.sequence;
     r.set_meta("source", "emadiag dataset");
     r.set_required_meta();
     r.set_meta("noise", sim::to_string(spec.noise));

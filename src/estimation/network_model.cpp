@@ -149,9 +149,10 @@ void NetworkModel::save(const std::string& path, const io::OutputInputs& inputs)
 }
 
 std::vector<double> NetworkModel::predict_normalised(const Run& run) const {
-    if (lower(run.load_case) != lower(spec.load_case) || lower(run.sequence) != lower(spec.sequence)) {
+    const std::string run_case = sim::to_string(run.load_case), run_sequence = sim::to_string(run.sequence);
+    if (lower(run_case) != lower(spec.load_case) || lower(run_sequence) != lower(spec.sequence)) {
         throw EmadiagError("the network model was trained on case " + spec.load_case + ", sequence " + spec.sequence +
-                           "; the run is case " + run.load_case + ", sequence " + run.sequence);
+                           "; the run is case " + run_case + ", sequence " + run_sequence);
     }
     const Eigen::VectorXd x = network_features(run, spec);
     for (Eigen::Index i = 0; i < x.size(); ++i) {

@@ -60,7 +60,7 @@ HealthEstimate estimate_dyn(const Run& run) {
     h.parameters.push_back(estimated(kParamFdj, r.fdj_nm, r.fdj_se_nm, "physics-wrls",
                                      r.eta_identifiable ? "" : "eta fixed at the section-8 prior middle; its spread is in the uncertainty"));
     h.parameters.push_back(not_estimated(kParamFsj, "physics-wrls",
-                                         "not identifiable: a " + run.sequence +
+                                         "not identifiable: a " + sim::to_string(run.sequence) +
                                              " run never ramps the torque slowly from rest; use a BRK run"));
     if (r.eta_identifiable) {
         h.parameters.push_back(estimated(kParamEtaO, r.eta_o, r.eta_o_se, "physics-wrls"));
@@ -205,7 +205,7 @@ HealthEstimate estimate_brk(const Run& run) {
 
 HealthEstimate estimate_physics(const CheckedRun& checked) {
     const Run& run = checked.run();
-    if (run.sequence == "brk") return estimate_brk(run);
+    if (run.sequence == sim::Sequence::Brk) return estimate_brk(run);
     return estimate_dyn(run);
 }
 

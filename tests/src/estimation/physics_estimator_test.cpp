@@ -97,8 +97,8 @@ TEST(PhysicsEstimator, EmbeddedReconstructionErrorIsExactForACubicSpeed) {
     auto w_second = [](double t) { return -40000.0 + 180000.0 * t; };
     emadiag::Run run;
     run.constants = {kKt, kJ, 800.0, kT};
-    run.load_case = "B";
-    run.sequence = "dyn";
+    run.load_case = emadiag::sim::LoadCase::B;
+    run.sequence = emadiag::sim::Sequence::Dyn;
     for (int k = 1; k <= 200; ++k) {
         const double t1 = k * kT, t0 = t1 - kT;
         RunSample smp;
