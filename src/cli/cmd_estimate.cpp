@@ -85,7 +85,7 @@ void print_text(std::ostream& os, const std::string& path, const Run& run, const
        << run.samples.size() << " samples\n";
     if (!validity.valid) os << invalid_warning(validity) << '\n';
     for (const auto& h : out.estimates) {
-        os << "\nestimator: " << h.estimator << '\n';
+        os << "\nestimator: " << to_string(h.estimator) << '\n';
         for (const auto& p : h.parameters) {
             os << "  " << std::left << std::setw(7) << p.name << ' ';
             if (p.value) {
@@ -131,7 +131,7 @@ nlohmann::json to_json(const std::string& path, const Run& run, const RunValidit
     j["estimates"] = nlohmann::json::array();
     for (const auto& h : out.estimates) {
         nlohmann::json e;
-        e["estimator"] = h.estimator;
+        e["estimator"] = to_string(h.estimator);
         e["parameters"] = nlohmann::json::array();
         for (const auto& p : h.parameters) {
             nlohmann::json q;

@@ -106,7 +106,7 @@ const bool registered = register_command(Command{
             // Only a complete, valid run gives a verdict (core/run_validity.hpp); any other is stored
             // with its samples and raw log, valid=false and the reason, and gives NO_TEST.
             const RunValidity validity = run_validity(run);
-            AssessedRun a = assess_run(run, sim::to_string(run.sequence), validity.valid, validity.reason);
+            AssessedRun a = assess_run(run, run.sequence, validity.valid, validity.reason);
             const Assessment verdict = assess({a}, limits);
 
             s.tail_number = o->tail;
@@ -141,7 +141,7 @@ const bool registered = register_command(Command{
             for (const auto& f : verdict.findings) {
                 std::ostringstream line;
                 line.precision(5);
-                line << "  " << f.parameter << ' ' << f.estimator << ' ';
+                line << "  " << f.parameter << ' ' << to_string(f.estimator) << ' ';
                 if (f.value) {
                     line << *f.value;
                     if (f.std_error) line << " +/- " << *f.std_error;

@@ -38,7 +38,7 @@ db::StoredRun to_stored_run(const Run& run, const std::string& tail, const std::
         s.samples.push_back({x.t_s, x.current_a, x.speed_rad_s, x.theta_m_rad, x.hinge_moment_nm, x.command_deg});
     if (estimates) {
         for (const auto& h : estimates->estimates)
-            for (const auto& p : h.parameters) s.estimates.push_back({h.estimator, p.name, p.value, p.std_error, p.identifiable, p.method, p.note});
+            for (const auto& p : h.parameters) s.estimates.push_back({to_string(h.estimator), p.name, p.value, p.std_error, p.identifiable, p.method, p.note});
     }
     return s;
 }
@@ -50,7 +50,7 @@ void set_assessment(db::StoredTestSession& session, const Assessment& assessment
     for (const auto& f : assessment.findings) {
         db::StoredFinding d;
         d.parameter = f.parameter;
-        d.estimator = f.estimator;
+        d.estimator = to_string(f.estimator);  // the database's text, by the one printer
         d.value = f.value;
         d.std_error = f.std_error;
         if (f.limit) {

@@ -78,7 +78,7 @@ Assessment assess_records(const std::vector<TestRunRecord>& runs, const HealthLi
         // An attempt followed by a retry of the same sequence is superseded by it.
         if (i + 1 < runs.size() && runs[i + 1].sequence == r.sequence) continue;
         AssessedRun a;
-        a.sequence = r.sequence;
+        a.sequence = sim::parse_sequence(r.sequence);  // the record's text (sequence_name or the spool manifest)
         const RunValidity v = r.outcome.valid ? run_validity(r.outcome.run) : RunValidity{};
         a.valid = r.outcome.valid && v.valid && r.estimate_error.empty();
         a.invalid_reason = !r.outcome.valid ? r.outcome.status + (r.outcome.invalid_reason.empty() ? "" : ": " + r.outcome.invalid_reason)

@@ -2,6 +2,7 @@
 // The shape every estimator shares (ARCHITECTURE.md "seams"): a function from a Run to estimates
 // with uncertainties. The paper's network and the physics estimator sit side by side behind it.
 #include "core/run.hpp"
+#include "estimation/estimator_id.hpp"
 
 #include <optional>
 #include <string>
@@ -28,7 +29,7 @@ struct ParameterEstimate {
 };
 
 struct HealthEstimate {
-    std::string estimator;  ///< "physics" or "network"
+    EstimatorMethod estimator = EstimatorMethod::Physics;  ///< printed "physics" or "network" (estimator_id.hpp)
     std::vector<ParameterEstimate> parameters;
     /// Free-form diagnostics (condition number, slipping samples used, ...), name -> value.
     std::vector<std::pair<std::string, double>> diagnostics;

@@ -167,7 +167,7 @@ std::vector<double> NetworkModel::predict_normalised(const Run& run) const {
 HealthEstimate NetworkModel::estimate(const Run& run) const {
     const std::vector<double> u = predict_normalised(run);
     HealthEstimate h;
-    h.estimator = "network";
+    h.estimator = EstimatorMethod::Network;
     const auto predicted = [&](const std::string& name) -> std::optional<std::size_t> {
         for (std::size_t o = 0; o < spec.outputs.size(); ++o) {
             if (spec.outputs[o] == name) return o;

@@ -54,7 +54,7 @@ std::pair<double, double> combine(const std::vector<std::pair<double, double>>& 
 
 HealthEstimate estimate_dyn(const Run& run) {
     HealthEstimate h;
-    h.estimator = "physics";
+    h.estimator = EstimatorMethod::Physics;
     const auto windows = slip_windows(run);
     const WrlsResult r = fit_friction_wrls(windows, run.constants.tau);
     h.parameters.push_back(estimated(kParamFdj, r.fdj_nm, r.fdj_se_nm, "physics-wrls",
@@ -86,7 +86,7 @@ constexpr double kStickSlipLikely = 0.5;
 
 HealthEstimate estimate_brk(const Run& run) {
     HealthEstimate h;
-    h.estimator = "physics";
+    h.estimator = EstimatorMethod::Physics;
     const BreakawayAnalysis a = analyse_breakaways(run);
     if (a.events.empty()) {
         std::string why;

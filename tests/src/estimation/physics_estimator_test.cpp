@@ -77,7 +77,7 @@ TEST(PhysicsEstimator, RecoversFdjAndEtaWithin0p1PercentOnNoiselessCaseBRuns) {
     for (const auto& [truth, run] : seeded_runs(sim::LoadCase::B, sim::Sequence::Dyn, sim::NoiseProfile::None,
                                                 kRunsPerProperty, seed)) {
         const HealthEstimate h = estimate_physics(check_run(run));
-        EXPECT_EQ(h.estimator, "physics");
+        EXPECT_EQ(to_string(h.estimator), "physics");
         EXPECT_TRUE(within_rel(h.find(kParamFdj), truth.fdj_nm, kNoiselessRelTolerance));
         EXPECT_TRUE(within_rel(h.find(kParamEtaO), truth.eta_o, kNoiselessRelTolerance));
         EXPECT_TRUE(within_rel(h.find(kParamEtaA), truth.eta_a, kNoiselessRelTolerance));
