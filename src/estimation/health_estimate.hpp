@@ -3,18 +3,13 @@
 // with uncertainties. The paper's network and the physics estimator sit side by side behind it.
 #include "core/run.hpp"
 #include "estimation/estimator_id.hpp"
+#include "estimation/health_parameter.hpp"
 
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace emadiag {
-
-/// Parameter names, in this order everywhere (CLI, JSON, database).
-inline constexpr const char* kParamFdj = "FDJ_Nm";
-inline constexpr const char* kParamFsj = "FSJ_Nm";
-inline constexpr const char* kParamEtaO = "eta_O";
-inline constexpr const char* kParamEtaA = "eta_A";
 
 /// Two-sided 95 % normal quantile: a parameter's 95 % interval is value +/- kZ95 std_error.
 inline constexpr double kZ95 = 1.959963984540054;

@@ -175,7 +175,8 @@ HealthEstimate NetworkModel::estimate(const Run& run) const {
         return std::nullopt;
     };
     const std::string why = "not identifiable: the network (case " + spec.load_case + ") does not predict it";
-    for (const char* name : {kParamFdj, kParamFsj, kParamEtaO, kParamEtaA}) {
+    for (const HealthParameter parameter : kHealthParameters) {
+        const char* name = to_string(parameter);
         ParameterEstimate p;
         p.name = name;
         p.method = "network";
@@ -183,7 +184,7 @@ HealthEstimate NetworkModel::estimate(const Run& run) const {
             const HealthRange r = health_range(name);
             p.value = r.denormalise(u[*o]);
             p.std_error = std_error_normalised[*o] * (r.hi - r.lo);
-        } else if (std::string(name) == kParamEtaA && predicted(kParamEtaO)) {
+        } else if (parameter == HealthParameter::EtaA && predicted(kParamEtaO)) {
             const std::size_t eo = *predicted(kParamEtaO);
             const HealthRange r = health_range(kParamEtaO);
             const double eta_o = r.denormalise(u[eo]);
