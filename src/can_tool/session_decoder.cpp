@@ -1,5 +1,6 @@
 #include "can_tool/session_decoder.hpp"
 
+#include "can_tool/test_sequence.hpp"
 #include "core/emadiag_error.hpp"
 #include "emadiag/sim/simulator.hpp"
 
@@ -113,7 +114,7 @@ Run SessionDecoder::build_run(const std::string& source) const {
         throw EmadiagError(source + ": no complete EMA_Ident (0x022, all 5 pages) in the session; the constants k_t, J, tau are unknown");
     if (!start_) throw EmadiagError(source + ": no TOOL_Command START_SEQUENCE (0x010) in the session");
     const can::EmaIdentification& id = ident_.identification();
-    const sim::Sequence seq = start_->sequence == can::icd::TestSequence::Brk ? sim::Sequence::Brk : sim::Sequence::Dyn;
+    const sim::Sequence seq = run_sequence_of(start_->sequence);
     Run run;
     run.constants = RunConstants{id.k_t_nm_per_a, id.j_kgm2, id.tau, id.sample_period_s};
     run.sequence = seq;

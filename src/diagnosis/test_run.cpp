@@ -5,6 +5,7 @@
 #include "diagnosis/session_storage.hpp"
 
 #include "can_tool/candump_run.hpp"
+#include "can_tool/test_sequence.hpp"
 
 #include "core/emadiag_error.hpp"
 #include "core/run_csv.hpp"
@@ -37,7 +38,7 @@ std::string without_prefix(const std::string& what) {
     return what.rfind(prefix, 0) == 0 ? what.substr(prefix.size()) : what;
 }
 
-std::string sequence_name(can::icd::TestSequence s) { return s == can::icd::TestSequence::Brk ? "brk" : "dyn"; }
+std::string sequence_name(can::icd::TestSequence s) { return sim::to_string(can_tool::run_sequence_of(s)); }
 
 std::string read_bytes(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
@@ -112,8 +113,8 @@ db::StoredTestSession to_stored_session(const SessionManifest& header, const std
 }  // namespace session_parts
 
 can::icd::TestSequence parse_test_sequence(const std::string& name) {
-    if (name == "dyn") return can::icd::TestSequence::Dyn;
-    if (name == "brk") return can::icd::TestSequence::Brk;
+    for (const auto s : {can::icd::TestSequence::Dyn, can::icd::TestSequence::Brk})
+        if (name == sequence_name(s)) return s;  // exactly the printed name, as the CLI lists it
     throw EmadiagError("unknown test sequence \"" + name + "\" (expected dyn or brk)");
 }
 
