@@ -49,7 +49,7 @@ void print_figures(int count, std::uint64_t seed) {
 
 void BM_EstimatePhysicsDynB(benchmark::State& state) {
     emadiag::sim::SimConfig c;
-    const auto run = emadiag::make_run(c, emadiag::sim::simulate(c));
+    const auto run = emadiag::check_run(emadiag::make_run(c, emadiag::sim::simulate(c)));
     for (auto _ : state) benchmark::DoNotOptimize(emadiag::estimate_physics(run));
 }
 BENCHMARK(BM_EstimatePhysicsDynB)->Unit(benchmark::kMillisecond);
@@ -58,7 +58,7 @@ void BM_EstimatePhysicsBrkTypical(benchmark::State& state) {
     emadiag::sim::SimConfig c;
     c.sequence = emadiag::sim::Sequence::Brk;
     c.noise = emadiag::sim::NoiseProfile::Typical;
-    const auto run = emadiag::make_run(c, emadiag::sim::simulate(c));
+    const auto run = emadiag::check_run(emadiag::make_run(c, emadiag::sim::simulate(c)));
     for (auto _ : state) benchmark::DoNotOptimize(emadiag::estimate_physics(run));
 }
 BENCHMARK(BM_EstimatePhysicsBrkTypical)->Unit(benchmark::kMillisecond);

@@ -571,7 +571,7 @@ std::vector<double> estimator_fsj_error(sim::LoadCase lc, const std::vector<Heal
         pool.emplace_back([&, t] {
             for (std::size_t i = t; i < n; i += threads) {
                 try {
-                    const auto est = emadiag::estimate_physics(emadiag::make_run(configs[i], results[i]));
+                    const auto est = emadiag::estimate_physics(emadiag::check_run(emadiag::make_run(configs[i], results[i])));
                     for (const auto& p : est.parameters) {
                         if (p.name == emadiag::kParamFsj && p.value) err[i] = (*p.value - labels[i].fsj_nm) / labels[i].fsj_nm;
                     }

@@ -70,10 +70,10 @@ int main(int argc, char** argv) {
         for (int k = 0; k < 2; ++k) {
             const auto j = static_cast<std::size_t>(i);
             AssessedRun a;
-            a.sequence = k == 0 ? "dyn" : "brk";
+            a.sequence = k == 0 ? sim::Sequence::Dyn : sim::Sequence::Brk;
             a.valid = true;
             try {
-                a.estimates = estimate_run(make_run(configs[k][j], results[k][j]));
+                a.estimates = estimate_run(check_run(make_run(configs[k][j], results[k][j])));
             } catch (const std::exception& e) {
                 a.valid = false;
                 a.invalid_reason = e.what();

@@ -112,8 +112,8 @@ int main(int argc, char** argv) {
     // run CSV: 20 samples of a plausible DYN run, with one extra column.
     Run run;
     run.constants = RunConstants{0.0625, 1.6e-5, 0.006, 0.0005};
-    run.load_case = "B";
-    run.sequence = "dyn";
+    run.load_case = emadiag::sim::LoadCase::B;
+    run.sequence = emadiag::sim::Sequence::Dyn;
     run.set_meta("source", "fuzz seed");
     run.extra_columns.emplace_back("T_R_Nm", std::vector<double>{});
     for (int k = 0; k < 20; ++k) {

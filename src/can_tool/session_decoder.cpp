@@ -1,5 +1,6 @@
 #include "can_tool/session_decoder.hpp"
 
+#include "can_tool/test_sequence.hpp"
 #include "core/emadiag_error.hpp"
 #include "emadiag/sim/simulator.hpp"
 
@@ -113,16 +114,16 @@ Run SessionDecoder::build_run(const std::string& source) const {
         throw EmadiagError(source + ": no complete EMA_Ident (0x022, all 5 pages) in the session; the constants k_t, J, tau are unknown");
     if (!start_) throw EmadiagError(source + ": no TOOL_Command START_SEQUENCE (0x010) in the session");
     const can::EmaIdentification& id = ident_.identification();
-    const sim::Sequence seq = start_->sequence == can::icd::TestSequence::Brk ? sim::Sequence::Brk : sim::Sequence::Dyn;
+    const sim::Sequence seq = run_sequence_of(start_->sequence);
     Run run;
     run.constants = RunConstants{id.k_t_nm_per_a, id.j_kgm2, id.tau, id.sample_period_s};
-    run.sequence = sim::to_string(seq);
-    run.load_case = "A";
+    run.sequence = seq;
+    run.load_case = sim::LoadCase::A;
     if (last_status_) {
         switch (last_status_->load_case) {
-            case can::icd::LoadCase::A: run.load_case = "A"; break;
-            case can::icd::LoadCase::AExt: run.load_case = "A-ext"; break;
-            case can::icd::LoadCase::B: run.load_case = "B"; break;
+            case can::icd::LoadCase::A: run.load_case = sim::LoadCase::A; break;
+            case can::icd::LoadCase::AExt: run.load_case = sim::LoadCase::AExt; break;
+            case can::icd::LoadCase::B: run.load_case = sim::LoadCase::B; break;
         }
     }
     const SessionStats st = stats();

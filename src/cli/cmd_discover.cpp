@@ -53,7 +53,7 @@ void print_errors(std::ostream& os, const char* label, const discovery::ErrorMet
 }
 
 void print_text(std::ostream& os, const std::string& path, const discovery::DiscoveryReport& r) {
-    os << "run " << path << ": case " << r.load_case << ", sequence " << r.sequence << ", " << r.samples << " samples\n";
+    os << "run " << path << ": case " << sim::to_string(r.load_case) << ", sequence " << sim::to_string(r.sequence) << ", " << r.samples << " samples\n";
     if (const std::string window = r.analysis_text(); !window.empty()) os << window << '\n';  // a long run's cost, stated
     os << "baseline model: " << discovery::kModelBase << " with\n";
     for (const auto& h : r.baseline_health) {
@@ -204,8 +204,8 @@ std::string plot_of(const discovery::DiscoveryReport& r, const std::string& labe
 Run run_from_stored(const db::StoredRun& s) {
     Run r;
     r.constants = RunConstants{s.k_t_nm_per_a, s.j_kgm2, s.tau, s.sample_period_s};
-    r.load_case = s.load_case;
-    r.sequence = s.sequence;
+    r.load_case = sim::parse_load_case(s.load_case);  // the database's text, by the one parser
+    r.sequence = sim::parse_sequence(s.sequence);
     const nlohmann::json meta = nlohmann::json::parse(s.meta_json, nullptr, false);
     if (meta.is_object()) {
         for (const auto& [k, v] : meta.items()) r.set_meta(k, v.is_string() ? v.get<std::string>() : v.dump());

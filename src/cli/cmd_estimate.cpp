@@ -29,6 +29,7 @@
 #include <iomanip>
 #include <iostream>
 #include <sstream>
+#include <utility>
 
 namespace emadiag::cli {
 namespace {
@@ -57,17 +58,34 @@ std::string fmt(double v, int digits) {
     return os.str();
 }
 
+/// The run read from `path`, checked where it enters (estimation/run_checks.hpp); a problem in a
+/// sample row also says which file line holds that row.
+CheckedRun checked_run_of_file(const std::string& path, Run run) {
+    try {
+        return check_run(std::move(run));
+    } catch (const EmadiagError& e) {
+        // Rows are numbered in sample order; say where they are in a CSV file.
+        const auto line = first_data_line(path);
+        if (!line) throw;
+        std::string msg = e.what();
+        const std::string prefix = "[emadiag] ";
+        if (msg.rfind(prefix, 0) == 0) msg.erase(0, prefix.size());
+        throw EmadiagError(msg + "\n  (" + path + ": sample row 1 is line " + std::to_string(*line) +
+                           ", so sample row N is line N + " + std::to_string(*line - 1) + ")");
+    }
+}
+
 /// The loud warning for a run that may give no verdict, printed before and after the estimates.
 std::string invalid_warning(const RunValidity& v) {
     return "WARNING: RUN NOT VALID: " + io::escape_text(v.reason) + ". The estimates are for information only; no verdict is possible from this run.";
 }
 
 void print_text(std::ostream& os, const std::string& path, const Run& run, const RunValidity& validity, const RunEstimates& out) {
-    os << "run " << io::escape_text(path) << ": case " << io::escape_text(run.load_case) << ", sequence " << io::escape_text(run.sequence) << ", "
+    os << "run " << io::escape_text(path) << ": case " << sim::to_string(run.load_case) << ", sequence " << sim::to_string(run.sequence) << ", "
        << run.samples.size() << " samples\n";
     if (!validity.valid) os << invalid_warning(validity) << '\n';
     for (const auto& h : out.estimates) {
-        os << "\nestimator: " << h.estimator << '\n';
+        os << "\nestimator: " << to_string(h.estimator) << '\n';
         for (const auto& p : h.parameters) {
             os << "  " << std::left << std::setw(7) << p.name << ' ';
             if (p.value) {
@@ -107,13 +125,13 @@ nlohmann::json to_json(const std::string& path, const Run& run, const RunValidit
     nlohmann::json j;
     j["schema"] = "emadiag-estimate";
     j["version"] = kEstimateJsonVersion;
-    j["run"] = {{"path", path}, {"case", run.load_case}, {"sequence", run.sequence}, {"samples", run.samples.size()},
+    j["run"] = {{"path", path}, {"case", sim::to_string(run.load_case)}, {"sequence", sim::to_string(run.sequence)}, {"samples", run.samples.size()},
                 {"valid", validity.valid}};
     if (!validity.valid) j["run"]["invalid_reason"] = validity.reason;
     j["estimates"] = nlohmann::json::array();
     for (const auto& h : out.estimates) {
         nlohmann::json e;
-        e["estimator"] = h.estimator;
+        e["estimator"] = to_string(h.estimator);
         e["parameters"] = nlohmann::json::array();
         for (const auto& p : h.parameters) {
             nlohmann::json q;
@@ -148,20 +166,8 @@ const bool registered = register_command(Command{
                                           "an augmented model JSON from `emadiag discover` (its terms are removed from the run first)");
         sub.add_flag("--json", *json, "Print the stable JSON schema of docs/estimate-json.md");
         return [path, model, json] {
-            const Run run = read_run_any(*path);
-            try {
-                check_run(run);
-            } catch (const EmadiagError& e) {
-                // Rows are numbered in sample order; say where they are in a CSV file.
-                const auto line = first_data_line(*path);
-                if (!line) throw;
-                std::string msg = e.what();
-                const std::string prefix = "[emadiag] ";
-                if (msg.rfind(prefix, 0) == 0) msg.erase(0, prefix.size());
-                throw EmadiagError(msg + "\n  (" + *path + ": sample row 1 is line " +
-                                         std::to_string(*line) + ", so sample row N is line N + " +
-                                         std::to_string(*line - 1) + ")");
-            }
+            const CheckedRun checked = checked_run_of_file(*path, read_run_any(*path));
+            const Run& run = checked.run();
             // Only a complete, valid run may give a verdict (core/run_validity.hpp): estimates of any
             // other are printed with a warning on both streams (stderr first, before anything can fail).
             const RunValidity validity = run_validity(run);
@@ -190,7 +196,9 @@ const bool registered = register_command(Command{
                     network_model.reset();  // the network: a shipped model for the run's case
                 }
             }
-            RunEstimates out = estimate_run(corrected ? *corrected : run, network_model);
+            // The corrected run is a new run: it is checked as it is made.
+            RunEstimates out = corrected ? estimate_run(check_run(std::move(*corrected)), network_model)
+                                         : estimate_run(checked, network_model);
             if (corrected) {
                 out.model_files.insert(out.model_files.begin(), *model);
                 out.notes.insert(out.notes.begin(), model_note);

@@ -43,6 +43,8 @@ namespace {
 namespace pg = emadiag::prognostics;
 
 constexpr const char* kHistorySimSource = "history-sim";
+/// The finding whose FDJ each session line shows.
+const EstimatorId kShownEstimator{EstimatorMethod::Physics, sim::Sequence::Dyn};
 constexpr const char* kDefaultStartUtc = "2026-01-05T08:00:00Z";
 constexpr int kMaxSessions = 1000;
 constexpr double kMaxDaysBetween = 3650.0;
@@ -225,7 +227,7 @@ const bool registered = register_command(Command{
                     run.set_meta("phase", o->phase);
                     run.set_meta("history_sim_session", std::to_string(i + 1));
                     run.set_meta("history_sim_day", format_exact(t_days));
-                    AssessedRun a = assess_run(run, sim::to_string(seq), result.finite, result.finite ? "" : "the simulation diverged");
+                    AssessedRun a = assess_run(run, seq, result.finite, result.finite ? "" : "the simulation diverged");
                     db::StoredRun stored = to_stored_run(run, o->tail, started_utc, a.estimates);
                     std::ostringstream csv;  // a simulated run's raw record is its run CSV
                     write_run_csv(csv, run);
@@ -240,7 +242,7 @@ const bool registered = register_command(Command{
                 set_assessment(s, verdict);
                 std::string physics_fdj = "-";
                 for (const auto& f : verdict.findings)
-                    if (f.parameter == kParamFdj && f.estimator == "physics:dyn" && f.value)
+                    if (f.parameter == kParamFdj && f.estimator == kShownEstimator && f.value)
                         physics_fdj = num(*f.value, 5) + " +/- " + num(f.std_error.value_or(0), 2);
                 for (const auto& a : assessed)
                     if (a.estimates) add_model_artifacts(s, a.estimates->model_files);
@@ -253,7 +255,7 @@ const bool registered = register_command(Command{
                 const std::int64_t id = receipt.session_id;
                 if (receipt.installation) lines.push_back("  " + describe_installation(*receipt.installation));
                 lines.push_back("  session " + std::to_string(id) + "  " + started_utc + (s.cycles ? "  cycles " + std::to_string(*s.cycles) : "") +
-                                "  true FDJ " + num(fdj_nm, 5) + " FSJ " + num(fsj_nm, 5) + "  physics:dyn FDJ " + physics_fdj + "  " + s.verdict);
+                                "  true FDJ " + num(fdj_nm, 5) + " FSJ " + num(fsj_nm, 5) + "  " + to_string(kShownEstimator) + " FDJ " + physics_fdj + "  " + s.verdict);
             }
             if (interrupted.load()) throw nothing_stored(o->sessions, "interrupted (SIGINT or SIGTERM)");
             batch.commit();  // a busy or full database: DbError says nothing was written

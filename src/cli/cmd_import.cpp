@@ -116,7 +116,7 @@ const bool registered = register_command(Command{
             s.tool_version = EMADIAG_VERSION;
             s.limits_json = limits.to_json().dump();
             s.source = "import";
-            s.work_performed = "imported " + o->phase + " run " + o->file + " (case " + run.load_case + ", sequence " + run.sequence +
+            s.work_performed = "imported " + o->phase + " run " + o->file + " (case " + sim::to_string(run.load_case) + ", sequence " + sim::to_string(run.sequence) +
                                "); estimates (physics, network) and verdict";
             if (o->amends != 0) {
                 s.amends_session_id = o->amends;
@@ -135,13 +135,13 @@ const bool registered = register_command(Command{
 
             db::Database database(o->db);
             const db::SessionReceipt receipt = db::store_session(database, s);
-            std::cout << "emadiag import: " << io::escape_text(o->file) << " (case " << io::escape_text(run.load_case) << ", "
-                      << io::escape_text(run.sequence) << ", " << run.samples.size() << " samples) -> tail " << o->tail << ", position "
+            std::cout << "emadiag import: " << io::escape_text(o->file) << " (case " << sim::to_string(run.load_case) << ", "
+                      << sim::to_string(run.sequence) << ", " << run.samples.size() << " samples) -> tail " << o->tail << ", position "
                       << *s.position << ", serial " << (serial.empty() ? "?" : serial) << ", " << o->phase << ", " << io::escape_text(utc) << '\n';
             for (const auto& f : verdict.findings) {
                 std::ostringstream line;
                 line.precision(5);
-                line << "  " << f.parameter << ' ' << f.estimator << ' ';
+                line << "  " << f.parameter << ' ' << to_string(f.estimator) << ' ';
                 if (f.value) {
                     line << *f.value;
                     if (f.std_error) line << " +/- " << *f.std_error;

@@ -4,6 +4,7 @@
 #include "cli/interrupt.hpp"
 
 #include "can_tool/recorder.hpp"
+#include "can_tool/test_sequence.hpp"
 #include "core/emadiag_error.hpp"
 #include "core/run_csv.hpp"
 #include "emadiag/can/can_bus.hpp"
@@ -44,7 +45,7 @@ const bool registered = register_command(Command{
             const std::atomic<bool>& interrupt = install_interrupt_handler();
             auto bus = can::open_bus(o->bus);
             can_tool::RecorderOptions ro;
-            ro.sequence = o->sequence == "brk" ? can::icd::TestSequence::Brk : can::icd::TestSequence::Dyn;
+            ro.sequence = can_tool::test_sequence_of(sim::parse_sequence(o->sequence));  // --sequence is dyn or brk
             ro.session_id = o->session_id;
             ro.log_path = o->out + ".log";
             ro.answer_timeout = std::chrono::milliseconds(o->answer_timeout_ms);

@@ -28,7 +28,7 @@ const bool registered = register_command(Command{
             if (!result.finite) throw sim::SimError("the simulation diverged (NaN or inf in the samples)");
             const Run run = make_run(config, result);
             if (!out->empty()) write_run_csv_file(*out, run, io::OutputInputs({o->params_file}));
-            std::cout << "EMA-REF-1 simulation: case " << run.load_case << ", sequence " << run.sequence << ", noise "
+            std::cout << "EMA-REF-1 simulation: case " << sim::to_string(run.load_case) << ", sequence " << sim::to_string(run.sequence) << ", noise "
                       << o->noise << ", seed " << o->seed << '\n';
             std::cout << format_summary(summarise(run));
             if (!out->empty()) std::cout << "wrote " << run.samples.size() << " samples to " << io::escape_text(*out) << '\n';

@@ -52,7 +52,7 @@ void print_findings(std::ostream& os, const TestRunResult& r, const HealthLimits
            << ") removed from each run: " << r.augmented_model->correction_text << '\n';
     }
     for (const auto& f : r.assessment.findings) {
-        os << "  " << std::left << std::setw(7) << f.parameter << ' ' << std::setw(12) << f.estimator << ' ';
+        os << "  " << std::left << std::setw(7) << f.parameter << ' ' << std::setw(12) << to_string(f.estimator) << ' ';
         std::string value = "-";
         if (f.value) {
             const double se = f.std_error.value_or(0.0);

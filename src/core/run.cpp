@@ -15,8 +15,8 @@ void Run::set_required_meta() {
     set_meta("J_kgm2", format_exact(constants.j_kgm2));
     set_meta("tau", format_exact(constants.tau));
     set_meta("sample_period_s", format_exact(constants.sample_period_s));
-    set_meta("case", load_case);
-    set_meta("sequence", sequence);
+    set_meta("case", sim::to_string(load_case));
+    set_meta("sequence", sim::to_string(sequence));
 }
 
 std::optional<std::string> Run::meta_value(const std::string& key) const {

@@ -2,6 +2,8 @@
 // The one record of a test run (ARCHITECTURE.md): the section-6 samples of ema-reference.md,
 // the actuator's constants and the run's metadata. Every source produces it (simulator,
 // CAN recorder, CSV and candump readers); every consumer reads it.
+#include "emadiag/sim/simulator.hpp"
+
 #include <map>
 #include <optional>
 #include <string>
@@ -33,8 +35,10 @@ struct Run {
     /// Every `# key=value` header line, in file order (keys are unique).
     std::vector<std::pair<std::string, std::string>> meta;
     RunConstants constants;
-    std::string load_case;  ///< "A", "A-ext" or "B"
-    std::string sequence;   ///< "dyn", "brk", "sweep"
+    /// Parsed and printed by sim::parse_load_case / sim::to_string ("A", "A-ext", "B") at the edges.
+    sim::LoadCase load_case = sim::LoadCase::B;
+    /// Parsed and printed by sim::parse_sequence / sim::to_string ("dyn", "brk", "sweep") at the edges.
+    sim::Sequence sequence = sim::Sequence::Dyn;
     std::vector<RunSample> samples;
     /// Columns after the six required ones, by name, one value per sample.
     std::vector<std::pair<std::string, std::vector<double>>> extra_columns;

@@ -217,8 +217,17 @@ Run read_run_csv(std::istream& in, const std::string& name) {
     need("J_kgm2", run.constants.j_kgm2, true);
     need("tau", run.constants.tau, true);
     need("sample_period_s", run.constants.sample_period_s, true);
-    if (auto c = run.meta_value("case")) run.load_case = *c; else problem(1, "missing metadata key 'case'");
-    if (auto s = run.meta_value("sequence")) run.sequence = *s; else problem(1, "missing metadata key 'sequence'");
+    // The one parser of each (a value it refuses is a problem reported above, with its line).
+    if (auto c = run.meta_value("case")) {
+        if (!metadata_value_problem("case", *c)) run.load_case = sim::parse_load_case(*c);
+    } else {
+        problem(1, "missing metadata key 'case'");
+    }
+    if (auto s = run.meta_value("sequence")) {
+        if (!metadata_value_problem("sequence", *s)) run.sequence = sim::parse_sequence(*s);
+    } else {
+        problem(1, "missing metadata key 'sequence'");
+    }
     if (!problems.empty()) {
         std::string msg = "invalid run CSV:";
         for (const auto& p : problems) msg += "\n  " + p;

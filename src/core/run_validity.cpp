@@ -93,8 +93,6 @@ RunValidity run_validity(const Run& run) {
         if (v)
             if (auto p = metadata_value_problem(key, *v)) return invalid("metadata " + *p);
     }
-    if (auto p = metadata_value_problem("case", run.load_case)) return invalid(*p);
-    if (auto p = metadata_value_problem("sequence", run.sequence)) return invalid(*p);
     // Every reason that holds, so a truncated log marked incomplete says both.
     std::vector<std::string> reasons;
     if (run.meta_value("valid").value_or("true") != "true") {
@@ -108,18 +106,18 @@ RunValidity run_validity(const Run& run) {
     }
     const std::string status = run.meta_value("status").value_or("complete");
     if (status != "complete" && run.meta_value("invalid_reason").value_or("") != "sequence " + status)
-        reasons.push_back("its metadata says status=" + status + ": the " + run.sequence + " sequence did not complete");
+        reasons.push_back("its metadata says status=" + status + ": the " + sim::to_string(run.sequence) + " sequence did not complete");
     if (run.samples.empty()) reasons.push_back("the run has no samples");
 
     // Complete: the samples reach the end of the sequence.
     const double period_s = run.constants.sample_period_s;
-    const double duration_s = sim::default_duration_s(sim::parse_sequence(run.sequence));
+    const double duration_s = sim::default_duration_s(run.sequence);
     if (!run.samples.empty() && std::isfinite(period_s) && period_s > 0) {
         const double last_t_s = run.samples.back().t_s;
         if (!(last_t_s >= duration_s - kRunEndToleranceSamples * period_s)) {
             const auto expected = static_cast<long long>(std::llround(duration_s / period_s));
             reasons.push_back("truncated: " + std::to_string(run.samples.size()) + " of " + std::to_string(expected) +
-                              " samples, the last at t = " + num(last_t_s) + " s; the " + run.sequence + " sequence lasts " +
+                              " samples, the last at t = " + num(last_t_s) + " s; the " + sim::to_string(run.sequence) + " sequence lasts " +
                               num(duration_s) + " s");
         }
     }

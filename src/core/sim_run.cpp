@@ -6,8 +6,8 @@ Run make_run(const sim::SimConfig& config, const sim::SimResult& result) {
     Run run;
     const sim::EmaParams& p = config.params;
     run.constants = RunConstants{p.k_t_nm_per_a, p.j_kgm2, p.tau, sim::kSamplePeriodS};
-    run.load_case = sim::to_string(config.load_case);
-    run.sequence = sim::to_string(config.sequence);
+    run.load_case = config.load_case;
+    run.sequence = config.sequence;
     run.set_meta("source", "emadiag simulate");
     run.set_required_meta();
     run.set_meta("noise", sim::to_string(config.noise));

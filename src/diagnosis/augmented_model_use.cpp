@@ -82,7 +82,7 @@ RunEstimates estimate_with_augmented_model(const Run& run, const AugmentedModelU
     } catch (const std::exception& e) {
         throw EmadiagError("--model " + model.path + ": " + without_prefix(e.what()));
     }
-    RunEstimates out = estimate_run(discovery::remove_model_effects(run, c));
+    RunEstimates out = estimate_run(check_run(discovery::remove_model_effects(run, c)));  // the corrected run is checked as it is made
     out.model_files.insert(out.model_files.begin(), model.path);
     out.notes.insert(out.notes.begin(), "augmented model " + model.path + " (sha256 " + model.sha256 +
                                             "): removed from the run before estimation: " +

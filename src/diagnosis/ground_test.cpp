@@ -5,6 +5,7 @@
 #include "diagnosis/session_storage.hpp"
 
 #include "can_tool/candump_run.hpp"
+#include "can_tool/test_sequence.hpp"
 
 #include "core/emadiag_error.hpp"
 #include "core/run_csv.hpp"
@@ -40,7 +41,7 @@ std::string without_prefix(const std::string& what) {
     return what.rfind(prefix, 0) == 0 ? what.substr(prefix.size()) : what;
 }
 
-std::string sequence_name(can::icd::TestSequence s) { return s == can::icd::TestSequence::Brk ? "brk" : "dyn"; }
+std::string sequence_name(can::icd::TestSequence s) { return sim::to_string(can_tool::run_sequence_of(s)); }
 
 std::string read_bytes(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
@@ -189,7 +190,7 @@ namespace session_parts {
 
 void estimate(TestRunRecord& rec, const AugmentedModelUse* model) {
     try {
-        rec.estimates = model != nullptr ? estimate_with_augmented_model(rec.outcome.run, *model) : estimate_run(rec.outcome.run);
+        rec.estimates = model != nullptr ? estimate_with_augmented_model(rec.outcome.run, *model) : estimate_run(check_run(rec.outcome.run));
     } catch (const EmadiagError& e) {
         rec.estimate_error = e.what();
     }
@@ -202,7 +203,7 @@ Assessment assess_records(const std::vector<TestRunRecord>& runs, const HealthLi
         // An attempt followed by a retry of the same sequence is superseded by it.
         if (i + 1 < runs.size() && runs[i + 1].sequence == r.sequence) continue;
         AssessedRun a;
-        a.sequence = r.sequence;
+        a.sequence = sim::parse_sequence(r.sequence);  // the record's text (sequence_name or the spool manifest)
         const RunValidity v = r.outcome.valid ? run_validity(r.outcome.run) : RunValidity{};
         a.valid = r.outcome.valid && v.valid && r.estimate_error.empty();
         a.invalid_reason = !r.outcome.valid ? r.outcome.status + (r.outcome.invalid_reason.empty() ? "" : ": " + r.outcome.invalid_reason)
@@ -236,8 +237,8 @@ db::StoredTestSession to_stored_session(const SessionManifest& header, const std
 }  // namespace session_parts
 
 can::icd::TestSequence parse_test_sequence(const std::string& name) {
-    if (name == "dyn") return can::icd::TestSequence::Dyn;
-    if (name == "brk") return can::icd::TestSequence::Brk;
+    for (const auto s : {can::icd::TestSequence::Dyn, can::icd::TestSequence::Brk})
+        if (name == sequence_name(s)) return s;  // exactly the printed name, as the CLI lists it
     throw EmadiagError("unknown test sequence \"" + name + "\" (expected dyn or brk)");
 }
 

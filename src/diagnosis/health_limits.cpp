@@ -18,7 +18,8 @@ constexpr double kMaxEfficiency = 1.0;
 
 /// Friction may not rise above its limit; efficiency may not fall below it.
 LimitKind natural_kind(const std::string& parameter) {
-    return parameter == kParamFdj || parameter == kParamFsj ? LimitKind::Max : LimitKind::Min;
+    const auto p = parse_health_parameter(parameter);
+    return p && (*p == HealthParameter::Fdj || *p == HealthParameter::Fsj) ? LimitKind::Max : LimitKind::Min;
 }
 
 }  // namespace
@@ -28,7 +29,7 @@ const char* to_string(LimitKind k) { return k == LimitKind::Max ? "max" : "min";
 HealthLimits HealthLimits::datasheet_envelope() {
     HealthLimits h;
     h.source = "ema-reference.md section 8 envelope (nominal +/-20 %)";
-    for (const char* p : {kParamFdj, kParamFsj, kParamEtaO, kParamEtaA}) {
+    for (const char* p : kHealthParameterNames) {
         const HealthRange r = health_range(p);
         const LimitKind k = natural_kind(p);
         h.limits.push_back({p, k, k == LimitKind::Max ? r.hi : r.lo});

@@ -5,6 +5,7 @@
 
 #include "can_tool/candump_run.hpp"
 #include "core/emadiag_error.hpp"
+#include "core/run_validity.hpp"
 #include "emadiag/io/output_path.hpp"
 #include "emadiag/db/database.hpp"
 
@@ -302,7 +303,7 @@ void recover_one(db::Database& database, const std::filesystem::path& dir, const
             // A log cut before the EMA identified itself holds no run, but its frames are the
             // record of what happened on the bus: stored as an invalid run with no samples.
             rec.outcome.run = Run{};
-            rec.outcome.run.sequence = l.sequence;
+            if (!metadata_value_problem("sequence", l.sequence)) rec.outcome.run.sequence = sim::parse_sequence(l.sequence);
             rec.outcome.run.set_meta("source", "candump log");
             rec.outcome.run.set_meta("log_file", rec.log_path);
             rec.outcome.run.set_meta("status", "incomplete");

@@ -20,8 +20,10 @@ db::StoredRun to_stored_run(const Run& run, const std::string& tail, const std::
     s.actuator_serial = run.meta_value("ema_serial_number").value_or("");
     s.started_utc = started_utc;
     s.source = run.meta_value("source").value_or("");
-    s.load_case = run.load_case;
-    s.sequence = run.sequence;
+    // The database's text, by the one printer. A run with no case in its metadata is a log from which
+    // no run could be decoded (diagnosis/session_spool.cpp): its case is unknown, stored empty.
+    s.load_case = run.meta_value("case") ? sim::to_string(run.load_case) : std::string();
+    s.sequence = sim::to_string(run.sequence);
     s.k_t_nm_per_a = run.constants.k_t_nm_per_a;
     s.j_kgm2 = run.constants.j_kgm2;
     s.tau = run.constants.tau;
@@ -36,7 +38,7 @@ db::StoredRun to_stored_run(const Run& run, const std::string& tail, const std::
         s.samples.push_back({x.t_s, x.current_a, x.speed_rad_s, x.theta_m_rad, x.hinge_moment_nm, x.command_deg});
     if (estimates) {
         for (const auto& h : estimates->estimates)
-            for (const auto& p : h.parameters) s.estimates.push_back({h.estimator, p.name, p.value, p.std_error, p.identifiable, p.method, p.note});
+            for (const auto& p : h.parameters) s.estimates.push_back({to_string(h.estimator), p.name, p.value, p.std_error, p.identifiable, p.method, p.note});
     }
     return s;
 }
@@ -48,7 +50,7 @@ void set_assessment(db::StoredTestSession& session, const Assessment& assessment
     for (const auto& f : assessment.findings) {
         db::StoredFinding d;
         d.parameter = f.parameter;
-        d.estimator = f.estimator;
+        d.estimator = to_string(f.estimator);  // the database's text, by the one printer
         d.value = f.value;
         d.std_error = f.std_error;
         if (f.limit) {

@@ -2,20 +2,21 @@
 
 #include "core/emadiag_error.hpp"
 #include "estimation/health_estimate.hpp"
+#include "estimation/run_checks.hpp"
 
 #include <sstream>
 #include <utility>
 
 namespace emadiag {
 
-AssessedRun assess_run(const Run& run, std::string sequence, bool valid, std::string invalid_reason) {
+AssessedRun assess_run(const Run& run, sim::Sequence sequence, bool valid, std::string invalid_reason) {
     AssessedRun a;
-    a.sequence = std::move(sequence);
+    a.sequence = sequence;
     a.valid = valid;
     a.invalid_reason = std::move(invalid_reason);
     if (!a.valid) return a;
     try {
-        a.estimates = estimate_run(run);
+        a.estimates = estimate_run(check_run(run));  // the run enters the analysis here
     } catch (const EmadiagError& e) {
         a.valid = false;
         a.invalid_reason = std::string("not estimated: ") + e.what();
@@ -28,11 +29,11 @@ std::string describe(const Finding& f) {
     std::ostringstream os;
     os.precision(4);
     os << f.parameter << ' ' << *f.value << " (95 % [" << *f.value - kZ95 * *f.std_error << ", " << *f.value + kZ95 * *f.std_error
-       << "]) against its " << to_string(f.limit->kind) << ' ' << f.limit->limit << " (" << f.estimator << ')';
+       << "]) against its " << to_string(f.limit->kind) << ' ' << f.limit->limit << " (" << to_string(f.estimator) << ')';
     return os.str();
 }
 
-bool is_physics(const Finding& f) { return f.estimator.rfind("physics", 0) == 0; }
+bool is_physics(const Finding& f) { return f.estimator.method == EstimatorMethod::Physics; }
 
 }  // namespace
 
@@ -76,7 +77,7 @@ Assessment assess(const std::vector<AssessedRun>& runs, const HealthLimits& limi
             for (const auto& p : h.parameters) {
                 Finding f;
                 f.parameter = p.name;
-                f.estimator = h.estimator + ":" + r.sequence;
+                f.estimator = EstimatorId{h.estimator, r.sequence};
                 f.note = p.note;
                 if (const auto* l = limits.find(p.name)) f.limit = *l;
                 if (!p.value) {
@@ -98,7 +99,7 @@ Assessment assess(const std::vector<AssessedRun>& runs, const HealthLimits& limi
     for (const auto& r : runs) {
         if (!r.valid) {
             a.verdict = Verdict::NoTest;
-            a.reason = "the " + r.sequence + " run is not valid (" + r.invalid_reason + "); nothing is concluded, repeat the test";
+            a.reason = "the " + sim::to_string(r.sequence) + " run is not valid (" + r.invalid_reason + "); nothing is concluded, repeat the test";
             return a;
         }
     }

@@ -27,7 +27,7 @@ enum class Verdict { Serviceable, Unserviceable, Inconclusive, NoTest };
 
 struct Finding {
     std::string parameter;   ///< kParam*
-    std::string estimator;   ///< "physics:brk", "network:dyn", ...: the method and the run's sequence
+    EstimatorId estimator;   ///< the method and the run's sequence, printed "physics:brk", "network:dyn", ...
     std::optional<double> value;
     std::optional<double> std_error;
     std::optional<ParameterLimit> limit;
@@ -37,7 +37,7 @@ struct Finding {
 
 /// One run of the session as the verdict sees it.
 struct AssessedRun {
-    std::string sequence;          ///< "dyn", "brk"
+    sim::Sequence sequence = sim::Sequence::Dyn;
     bool valid = false;
     std::string invalid_reason;    ///< when not valid
     std::optional<RunEstimates> estimates;  ///< empty when the run was not estimated
@@ -46,7 +46,7 @@ struct AssessedRun {
 /// The run as the verdict sees it: estimated (estimate_run) when `valid`; an estimator that refuses
 /// the run makes it not valid, "not estimated: " and the estimator's reason. One rule for import and
 /// history-sim.
-[[nodiscard]] AssessedRun assess_run(const Run& run, std::string sequence, bool valid, std::string invalid_reason);
+[[nodiscard]] AssessedRun assess_run(const Run& run, sim::Sequence sequence, bool valid, std::string invalid_reason);
 
 struct Assessment {
     Verdict verdict = Verdict::NoTest;

@@ -157,7 +157,8 @@ struct EfficiencyAlternative {
 };
 
 struct DiscoveryReport {
-    std::string load_case, sequence;
+    sim::LoadCase load_case = sim::LoadCase::B;
+    sim::Sequence sequence = sim::Sequence::Dyn;
     std::size_t samples = 0;         ///< samples analysed
     std::size_t total_samples = 0;   ///< samples in the run (more than `samples` when it was windowed)
     double analysed_end_s = 0;       ///< time of the last sample analysed

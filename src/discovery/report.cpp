@@ -200,7 +200,7 @@ nlohmann::json DiscoveryReport::to_json() const {
     nlohmann::json j;
     j["schema"] = "emadiag-discover";
     j["version"] = kModelJsonVersion;
-    j["run"] = {{"case", load_case}, {"sequence", sequence}, {"samples", samples}, {"total_samples", total_samples}};
+    j["run"] = {{"case", sim::to_string(load_case)}, {"sequence", sim::to_string(sequence)}, {"samples", samples}, {"total_samples", total_samples}};
     if (total_samples > samples) j["run"]["analysed"] = analysis_text();
     j["added_effects"] = added_effects();
     j["baseline_health"] = nlohmann::json::object();

@@ -40,26 +40,43 @@ constexpr int kGroupsPerThread = 2;  // batch groups per thread and chunk
 
 }  // namespace
 
-HealthRange health_range(const std::string& param) {
-    const auto around = [](double nominal) {
-        return HealthRange{nominal * (1.0 - kHealthSpread), nominal * (1.0 + kHealthSpread)};
-    };
-    if (param == kParamFdj) return around(kNominalFdjNm);
-    if (param == kParamFsj) return around(kNominalFsjNm);
-    if (param == kParamEtaA) return around(kNominalEtaA);
-    if (param == kParamEtaO) {
-        const HealthRange a = around(kNominalEtaA);
-        return HealthRange{sim::eta_o_from_eta_a(a.lo, kDatasheetTau), sim::eta_o_from_eta_a(a.hi, kDatasheetTau)};
-    }
+namespace {
+
+HealthParameter health_parameter_named(const std::string& param) {
+    if (const auto p = parse_health_parameter(param)) return *p;
     throw EmadiagError("unknown health parameter '" + param + "' (expected FDJ_Nm, FSJ_Nm, eta_O or eta_A)");
 }
 
-double HealthLabels::get(const std::string& param) const {
-    if (param == kParamFdj) return fdj_nm;
-    if (param == kParamFsj) return fsj_nm;
-    if (param == kParamEtaO) return eta_o;
-    if (param == kParamEtaA) return eta_a;
-    throw EmadiagError("unknown health parameter '" + param + "' (expected FDJ_Nm, FSJ_Nm, eta_O or eta_A)");
+}  // namespace
+
+HealthRange health_range(const std::string& param) { return health_range(health_parameter_named(param)); }
+
+HealthRange health_range(HealthParameter param) {
+    const auto around = [](double nominal) {
+        return HealthRange{nominal * (1.0 - kHealthSpread), nominal * (1.0 + kHealthSpread)};
+    };
+    switch (param) {
+        case HealthParameter::Fdj: return around(kNominalFdjNm);
+        case HealthParameter::Fsj: return around(kNominalFsjNm);
+        case HealthParameter::EtaA: return around(kNominalEtaA);
+        case HealthParameter::EtaO: {
+            const HealthRange a = around(kNominalEtaA);
+            return HealthRange{sim::eta_o_from_eta_a(a.lo, kDatasheetTau), sim::eta_o_from_eta_a(a.hi, kDatasheetTau)};
+        }
+    }
+    throw EmadiagError("unknown health parameter");
+}
+
+double HealthLabels::get(const std::string& param) const { return get(health_parameter_named(param)); }
+
+double HealthLabels::get(HealthParameter param) const {
+    switch (param) {
+        case HealthParameter::Fdj: return fdj_nm;
+        case HealthParameter::Fsj: return fsj_nm;
+        case HealthParameter::EtaO: return eta_o;
+        case HealthParameter::EtaA: return eta_a;
+    }
+    throw EmadiagError("unknown health parameter");
 }
 
 void HealthLabels::apply_to(sim::EmaParams& params) const {
@@ -107,8 +124,8 @@ Run Dataset::run(std::size_t i) const {
     }
     Run r;
     r.constants = constants;
-    r.load_case = sim::to_string(spec.load_case);
-    r.sequence = sim::to_string(spec.sequence);
+    r.load_case = spec.load_case;
+    r.sequence = spec.sequence;
     r.set_meta("source", "emadiag dataset");
     r.set_required_meta();
     r.set_meta("noise", sim::to_string(spec.noise));

@@ -8,6 +8,7 @@
 // applied per run with its own recorded seed. The file keeps every raw sample and the labels; the
 // format is documented in docs/dataset-format.md.
 #include "core/run.hpp"
+#include "estimation/health_parameter.hpp"
 #include "emadiag/sim/simulator.hpp"
 
 #include <cstdint>
@@ -28,6 +29,7 @@ struct HealthRange {
 /// Range of kParamFdj, kParamFsj, kParamEtaA or kParamEtaO (eta_O: eq. (4) inverse of the eta_A
 /// range). Throws EmadiagError on another name.
 [[nodiscard]] HealthRange health_range(const std::string& param);
+[[nodiscard]] HealthRange health_range(HealthParameter param);
 
 /// The true health parameters of a simulated run (the labels).
 struct HealthLabels {
@@ -37,6 +39,7 @@ struct HealthLabels {
     double eta_a = 0;
     /// Value of a kParam* name.
     [[nodiscard]] double get(const std::string& param) const;
+    [[nodiscard]] double get(HealthParameter param) const;
     /// Sets FDJ, FSJ, eta_O and eta_A of `params` to these labels.
     void apply_to(sim::EmaParams& params) const;
 };
@@ -134,9 +137,9 @@ inline constexpr double kValidationFraction = 0.15;
 template <class Rng>
 HealthLabels draw_health_labels(Rng& rng, double tau) {
     HealthLabels h;
-    h.fdj_nm = health_range("FDJ_Nm").denormalise(uniform01(rng()));
-    h.fsj_nm = health_range("FSJ_Nm").denormalise(uniform01(rng()));
-    h.eta_a = health_range("eta_A").denormalise(uniform01(rng()));
+    h.fdj_nm = health_range(HealthParameter::Fdj).denormalise(uniform01(rng()));
+    h.fsj_nm = health_range(HealthParameter::Fsj).denormalise(uniform01(rng()));
+    h.eta_a = health_range(HealthParameter::EtaA).denormalise(uniform01(rng()));
     h.eta_o = sim::eta_o_from_eta_a(h.eta_a, tau);
     return h;
 }

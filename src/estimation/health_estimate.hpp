@@ -2,18 +2,14 @@
 // The shape every estimator shares (ARCHITECTURE.md "seams"): a function from a Run to estimates
 // with uncertainties. The paper's network and the physics estimator sit side by side behind it.
 #include "core/run.hpp"
+#include "estimation/estimator_id.hpp"
+#include "estimation/health_parameter.hpp"
 
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace emadiag {
-
-/// Parameter names, in this order everywhere (CLI, JSON, database).
-inline constexpr const char* kParamFdj = "FDJ_Nm";
-inline constexpr const char* kParamFsj = "FSJ_Nm";
-inline constexpr const char* kParamEtaO = "eta_O";
-inline constexpr const char* kParamEtaA = "eta_A";
 
 /// Two-sided 95 % normal quantile: a parameter's 95 % interval is value +/- kZ95 std_error.
 inline constexpr double kZ95 = 1.959963984540054;
@@ -28,7 +24,7 @@ struct ParameterEstimate {
 };
 
 struct HealthEstimate {
-    std::string estimator;  ///< "physics" or "network"
+    EstimatorMethod estimator = EstimatorMethod::Physics;  ///< printed "physics" or "network" (estimator_id.hpp)
     std::vector<ParameterEstimate> parameters;
     /// Free-form diagnostics (condition number, slipping samples used, ...), name -> value.
     std::vector<std::pair<std::string, double>> diagnostics;

@@ -147,9 +147,10 @@ void NetworkModel::save(const std::string& path, const io::OutputInputs& inputs)
 }
 
 std::vector<double> NetworkModel::predict_normalised(const Run& run) const {
-    if (lower(run.load_case) != lower(spec.load_case) || lower(run.sequence) != lower(spec.sequence)) {
+    const std::string run_case = sim::to_string(run.load_case), run_sequence = sim::to_string(run.sequence);
+    if (lower(run_case) != lower(spec.load_case) || lower(run_sequence) != lower(spec.sequence)) {
         throw EmadiagError("the network model was trained on case " + spec.load_case + ", sequence " + spec.sequence +
-                           "; the run is case " + run.load_case + ", sequence " + run.sequence);
+                           "; the run is case " + run_case + ", sequence " + run_sequence);
     }
     const Eigen::VectorXd x = network_features(run, spec);
     for (Eigen::Index i = 0; i < x.size(); ++i) {
@@ -164,7 +165,7 @@ std::vector<double> NetworkModel::predict_normalised(const Run& run) const {
 HealthEstimate NetworkModel::estimate(const Run& run) const {
     const std::vector<double> u = predict_normalised(run);
     HealthEstimate h;
-    h.estimator = "network";
+    h.estimator = EstimatorMethod::Network;
     const auto predicted = [&](const std::string& name) -> std::optional<std::size_t> {
         for (std::size_t o = 0; o < spec.outputs.size(); ++o) {
             if (spec.outputs[o] == name) return o;
@@ -172,7 +173,8 @@ HealthEstimate NetworkModel::estimate(const Run& run) const {
         return std::nullopt;
     };
     const std::string why = "not identifiable: the network (case " + spec.load_case + ") does not predict it";
-    for (const char* name : {kParamFdj, kParamFsj, kParamEtaO, kParamEtaA}) {
+    for (const HealthParameter parameter : kHealthParameters) {
+        const char* name = to_string(parameter);
         ParameterEstimate p;
         p.name = name;
         p.method = "network";
@@ -180,7 +182,7 @@ HealthEstimate NetworkModel::estimate(const Run& run) const {
             const HealthRange r = health_range(name);
             p.value = r.denormalise(u[*o]);
             p.std_error = std_error_normalised[*o] * (r.hi - r.lo);
-        } else if (std::string(name) == kParamEtaA && predicted(kParamEtaO)) {
+        } else if (parameter == HealthParameter::EtaA && predicted(kParamEtaO)) {
             const std::size_t eo = *predicted(kParamEtaO);
             const HealthRange r = health_range(kParamEtaO);
             const double eta_o = r.denormalise(u[eo]);

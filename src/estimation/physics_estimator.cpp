@@ -54,13 +54,13 @@ std::pair<double, double> combine(const std::vector<std::pair<double, double>>& 
 
 HealthEstimate estimate_dyn(const Run& run) {
     HealthEstimate h;
-    h.estimator = "physics";
+    h.estimator = EstimatorMethod::Physics;
     const auto windows = slip_windows(run);
     const WrlsResult r = fit_friction_wrls(windows, run.constants.tau);
     h.parameters.push_back(estimated(kParamFdj, r.fdj_nm, r.fdj_se_nm, "physics-wrls",
                                      r.eta_identifiable ? "" : "eta fixed at the section-8 prior middle; its spread is in the uncertainty"));
     h.parameters.push_back(not_estimated(kParamFsj, "physics-wrls",
-                                         "not identifiable: a " + run.sequence +
+                                         "not identifiable: a " + sim::to_string(run.sequence) +
                                              " run never ramps the torque slowly from rest; use a BRK run"));
     if (r.eta_identifiable) {
         h.parameters.push_back(estimated(kParamEtaO, r.eta_o, r.eta_o_se, "physics-wrls"));
@@ -86,7 +86,7 @@ constexpr double kStickSlipLikely = 0.5;
 
 HealthEstimate estimate_brk(const Run& run) {
     HealthEstimate h;
-    h.estimator = "physics";
+    h.estimator = EstimatorMethod::Physics;
     const BreakawayAnalysis a = analyse_breakaways(run);
     if (a.events.empty()) {
         std::string why;
@@ -203,9 +203,9 @@ HealthEstimate estimate_brk(const Run& run) {
 
 }  // namespace
 
-HealthEstimate estimate_physics(const Run& run) {
-    check_run(run);
-    if (run.sequence == "brk") return estimate_brk(run);
+HealthEstimate estimate_physics(const CheckedRun& checked) {
+    const Run& run = checked.run();
+    if (run.sequence == sim::Sequence::Brk) return estimate_brk(run);
     return estimate_dyn(run);
 }
 

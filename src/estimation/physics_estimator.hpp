@@ -11,12 +11,13 @@
 // Analysis never reads the true_* or effect_* metadata of a run.
 #include "core/run.hpp"
 #include "estimation/health_estimate.hpp"
+#include "estimation/run_checks.hpp"
 
 namespace emadiag {
 
-/// Estimates FDJ, FSJ, eta_O and eta_A from a run (any sequence). Throws EmadiagError on an
-/// invalid run (see estimation/run_checks.hpp) or when there are too few slipping samples.
+/// Estimates FDJ, FSJ, eta_O and eta_A from a checked run (any sequence; estimation/run_checks.hpp).
+/// Throws EmadiagError when there are too few slipping samples.
 /// HealthEstimate::estimator is "physics"; parameters are always the four kParam* in order.
-[[nodiscard]] emadiag::HealthEstimate estimate_physics(const emadiag::Run& run);
+[[nodiscard]] emadiag::HealthEstimate estimate_physics(const emadiag::CheckedRun& run);
 
 }  // namespace emadiag

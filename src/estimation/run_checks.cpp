@@ -6,6 +6,7 @@
 #include <cmath>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace emadiag {
@@ -14,7 +15,7 @@ constexpr std::size_t kMaxListedProblems = 20;
 
 }  // namespace
 
-void check_run(const Run& run) {
+CheckedRun check_run(Run run) {
     std::vector<std::string> problems;
     std::size_t hidden = 0;
     auto problem = [&](std::string p) {
@@ -53,7 +54,7 @@ void check_run(const Run& run) {
             }
         }
     }
-    if (problems.empty()) return;
+    if (problems.empty()) return CheckedRun(std::move(run));
     std::string msg = "run cannot be analysed (" + std::to_string(problems.size() + hidden) + " problem" +
                       (problems.size() + hidden == 1 ? "" : "s") + "):";
     for (const auto& p : problems) msg += "\n  " + p;

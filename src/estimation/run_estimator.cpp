@@ -32,7 +32,7 @@ std::optional<std::string> shipped_model_for(const Run& run, std::vector<std::st
         for (const auto& f : files) {
             try {
                 const NetworkModel m = NetworkModel::load(f.string());
-                if (m.spec.load_case != run.load_case || m.spec.sequence != run.sequence) continue;
+                if (m.spec.load_case != sim::to_string(run.load_case) || m.spec.sequence != sim::to_string(run.sequence)) continue;
                 if (!first_match) first_match = f.string();
                 if (m.training.is_object() && m.training.value("noise", std::string{}) == wanted_noise) return f.string();
             } catch (const std::exception& e) {
@@ -44,10 +44,10 @@ std::optional<std::string> shipped_model_for(const Run& run, std::vector<std::st
     return std::nullopt;
 }
 
-RunEstimates estimate_run(const Run& run, const std::optional<std::string>& model_file) {
-    check_run(run);
+RunEstimates estimate_run(const CheckedRun& checked, const std::optional<std::string>& model_file) {
+    const Run& run = checked.run();
     RunEstimates out;
-    out.estimates.push_back(estimate_physics(run));
+    out.estimates.push_back(estimate_physics(checked));
     std::optional<std::string> mfile = model_file;
     if (!mfile) mfile = shipped_model_for(run, out.notes);
     if (mfile) {
@@ -55,7 +55,7 @@ RunEstimates estimate_run(const Run& run, const std::optional<std::string>& mode
         out.estimates.push_back(m.estimate(run));
         out.model_files.push_back(*mfile);
     } else {
-        out.notes.push_back("no network model for case " + run.load_case + ", sequence " + run.sequence +
+        out.notes.push_back("no network model for case " + sim::to_string(run.load_case) + ", sequence " + sim::to_string(run.sequence) +
                             " (give --model FILE); physics estimator only");
     }
     return out;

@@ -4,6 +4,7 @@
 // sequence). Used by `emadiag estimate` and by the technician's `emadiag test-run`.
 #include "core/run.hpp"
 #include "estimation/health_estimate.hpp"
+#include "estimation/run_checks.hpp"
 
 #include <filesystem>
 #include <optional>
@@ -29,9 +30,9 @@ struct RunEstimates {
 /// Unreadable model files are skipped with a note.
 [[nodiscard]] std::optional<std::string> shipped_model_for(const Run& run, std::vector<std::string>& notes);
 
-/// Runs check_run (throws EmadiagError naming what is wrong and where), then the physics estimator
-/// and the network (`model_file`, else a shipped model; none is a note, not an error).
-[[nodiscard]] RunEstimates estimate_run(const Run& run, const std::optional<std::string>& model_file = std::nullopt);
+/// The physics estimator and the network (`model_file`, else a shipped model; none is a note, not an
+/// error) on a run checked where it entered (check_run).
+[[nodiscard]] RunEstimates estimate_run(const CheckedRun& checked, const std::optional<std::string>& model_file = std::nullopt);
 
 /// |difference| / combined standard error of the two methods for one parameter, when both have a
 /// value; the methods agree when it is at most kZ95.

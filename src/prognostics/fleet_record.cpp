@@ -82,7 +82,7 @@ void fill_trends(HistoryView& v, const std::vector<const db::StoredTestSession*>
     }
     axes.sessions = std::move(picked);
     std::vector<ParameterHistory> parameters;
-    for (const char* p : {kParamFdj, kParamFsj, kParamEtaO, kParamEtaA}) parameters.push_back(analyse(axes, p, o));
+    for (const char* p : kHealthParameterNames) parameters.push_back(analyse(axes, p, o));
     v.parameters = SharedList<ParameterHistory>(std::move(parameters));
 }
 

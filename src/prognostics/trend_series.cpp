@@ -1,6 +1,7 @@
 #include "prognostics/trend_series.hpp"
 
 #include "core/emadiag_error.hpp"
+#include "estimation/estimator_id.hpp"
 #include "prognostics/utc_time.hpp"
 
 #include "emadiag/calc/inverse_variance.hpp"
@@ -11,9 +12,11 @@
 namespace emadiag::prognostics {
 namespace {
 
-constexpr const char* kPhysicsPrefix = "physics";
-
-bool is_physics(const db::StoredFinding& f) { return f.estimator.rfind(kPhysicsPrefix, 0) == 0; }
+/// The database's text read by the one parser (estimation/estimator_id.hpp).
+bool is_physics(const db::StoredFinding& f) {
+    const auto id = parse_estimator_id(f.estimator);
+    return id && id->method == EstimatorMethod::Physics;
+}
 
 std::string num(double v) {
     std::ostringstream os;

@@ -13,17 +13,21 @@ namespace pg = emadiag::prognostics;
 
 double datasheet_nominal(const std::string& parameter) {
     const sim::EmaParams datasheet;
-    if (parameter == kParamFdj) return datasheet.fdj_nm;
-    if (parameter == kParamFsj) return datasheet.fsj_nm;
-    if (parameter == kParamEtaO) return datasheet.eta_o;
-    if (parameter == kParamEtaA) return datasheet.eta_a;
-    throw EmadiagError("no datasheet nominal for parameter \"" + parameter + "\" (expected FDJ_Nm, FSJ_Nm, eta_O or eta_A)");
+    const auto p = parse_health_parameter(parameter);
+    if (!p) throw EmadiagError("no datasheet nominal for parameter \"" + parameter + "\" (expected FDJ_Nm, FSJ_Nm, eta_O or eta_A)");
+    switch (*p) {
+        case HealthParameter::Fdj: return datasheet.fdj_nm;
+        case HealthParameter::Fsj: return datasheet.fsj_nm;
+        case HealthParameter::EtaO: return datasheet.eta_o;
+        case HealthParameter::EtaA: return datasheet.eta_a;
+    }
+    return 0.0;
 }
 
 std::string parameter_unit(const std::string& parameter) {
-    if (parameter == kParamFdj || parameter == kParamFsj) return "N m";
-    if (parameter == kParamEtaO || parameter == kParamEtaA) return "";
-    throw EmadiagError("no unit known for parameter \"" + parameter + "\" (expected FDJ_Nm, FSJ_Nm, eta_O or eta_A)");
+    const auto p = parse_health_parameter(parameter);
+    if (!p) throw EmadiagError("no unit known for parameter \"" + parameter + "\" (expected FDJ_Nm, FSJ_Nm, eta_O or eta_A)");
+    return *p == HealthParameter::Fdj || *p == HealthParameter::Fsj ? "N m" : "";
 }
 
 std::optional<ReportCurve> sample_fit(const pg::ParameterTrend& p, double origin_days) {

@@ -77,7 +77,7 @@ PhysicsEval eval_physics(const Dataset& d, const std::vector<int>& idx, const st
     for (std::size_t k = 0; k < idx.size(); ++k) {
         const auto i = static_cast<std::size_t>(idx[k]);
         try {
-            const HealthEstimate h = estimate_physics(d.run(i));
+            const HealthEstimate h = estimate_physics(check_run(d.run(i)));
             std::vector<double> u(outputs.size());
             std::vector<double> half(outputs.size());
             for (std::size_t o = 0; o < outputs.size(); ++o) {

@@ -49,11 +49,11 @@ CalibrationResult evaluate_physics(const CalibrationSpec& spec) {
     }
     const auto results = sim::simulate_batch(configs, std::max(1u, spec.threads));
     std::map<std::string, ParameterScore> acc;
-    for (const char* p : {kParamFdj, kParamFsj, kParamEtaO, kParamEtaA}) acc[p].name = p;
+    for (const char* p : kHealthParameterNames) acc[p].name = p;
     for (std::size_t i = 0; i < results.size(); ++i) {
         HealthEstimate est;
         try {
-            est = estimate_physics(make_run(configs[i], results[i]));
+            est = estimate_physics(check_run(make_run(configs[i], results[i])));
         } catch (const std::exception& e) {
             ++out.failures;
             out.failure_messages.push_back("run " + std::to_string(i) + ": " + e.what());
@@ -78,7 +78,7 @@ CalibrationResult evaluate_physics(const CalibrationSpec& spec) {
             s.mean_z2 += p.std_error > 0 ? std::pow(err / p.std_error, 2) : (err == 0 ? 0.0 : INFINITY);
         }
     }
-    for (const char* p : {kParamFdj, kParamFsj, kParamEtaO, kParamEtaA}) {
+    for (const char* p : kHealthParameterNames) {
         auto s = acc[p];
         if (s.estimated > 0) {
             s.mse_normalised /= s.estimated;

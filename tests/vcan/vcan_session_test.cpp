@@ -200,8 +200,8 @@ void check_session(Vcan& t, const std::string& seq, sim::Sequence sseq, const st
     EXPECT_EQ(run.meta_value("valid"), std::optional<std::string>("true"));
     EXPECT_EQ(run.meta_value("frames_lost"), std::optional<std::string>("0"));
     EXPECT_EQ(run.meta_value("crc_failures"), std::optional<std::string>("0"));
-    EXPECT_EQ(run.sequence, seq);
-    EXPECT_EQ(run.load_case, "B");
+    EXPECT_EQ(run.sequence, sseq);
+    EXPECT_EQ(run.load_case, sim::LoadCase::B);
     EXPECT_EQ(run.constants.k_t_nm_per_a, static_cast<double>(0.2f));
     sim::SimConfig direct;
     direct.load_case = sim::LoadCase::B;

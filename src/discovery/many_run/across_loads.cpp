@@ -183,8 +183,8 @@ AcrossLoads across_loads(const std::vector<const Run*>& runs, const std::vector<
     std::set<std::string> cases;
     bool efficiency_ran = false;
     for (const auto* r : runs) {
-        out.load_cases.push_back(r->load_case);
-        cases.insert(r->load_case);
+        out.load_cases.push_back(sim::to_string(r->load_case));
+        cases.insert(out.load_cases.back());
     }
     for (const auto& r : reports) efficiency_ran = efficiency_ran || r.efficiency.ran;
     if (cases.size() < 2) {

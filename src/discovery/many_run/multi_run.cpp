@@ -183,7 +183,7 @@ AcrossRunsReport discover_runs(const std::vector<Run>& runs, const std::vector<s
     std::vector<std::size_t> analysed_index;  // into `runs`
     std::vector<std::size_t> brk_runs;
     for (std::size_t i = 0; i < runs.size(); ++i) {
-        if (runs[i].sequence == "brk") {  // compared with a DYN run below
+        if (runs[i].sequence == sim::Sequence::Brk) {  // compared with a DYN run below
             brk_runs.push_back(i);
             continue;
         }

@@ -106,7 +106,7 @@ ResimTarget resim_target(const Run& run) {
                            " s is not the simulator's " + number_text(sim::kSamplePeriodS) + " s (within " +
                            number_text(100 * kSamplePeriodTolerance) + " %): the run cannot be re-simulated");
     }
-    return ResimTarget{sim::parse_load_case(run.load_case), sim::parse_sequence(run.sequence), run.samples.size(), c};
+    return ResimTarget{run.load_case, run.sequence, run.samples.size(), c};
 }
 
 sim::SimConfig resim_config(const ResimTarget& target, const sim::EmaParams& params) {

@@ -23,10 +23,9 @@ std::size_t RunSignals::slipping_count() const {
     return n;
 }
 
-RunSignals run_signals(const Run& run) {
-    check_run(run);
-    return unchecked_run_signals(run);
-}
+RunSignals run_signals(const Run& run) { return run_signals(check_run(run)); }
+
+RunSignals run_signals(const CheckedRun& checked) { return unchecked_run_signals(checked.run()); }
 
 RunSignals unchecked_run_signals(const Run& run) {
     RunSignals s;

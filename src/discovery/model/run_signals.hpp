@@ -7,6 +7,7 @@
 // The friction law T_F,law = d (FDJ + c(d) |F_R|), d = sgn(w), c = 1/eta_O - 1 when the load
 // opposes (F_R d > 0), else 1 - eta_A (eqs. 3 to 5; section 3 step 5) is given for reference.
 #include "core/run.hpp"
+#include "estimation/run_checks.hpp"
 
 #include <cstddef>
 #include <vector>
@@ -32,7 +33,10 @@ struct RunSignals {
     [[nodiscard]] std::size_t slipping_count() const;
 };
 
-/// Throws EmadiagError (via estimation/run_checks.hpp) on NaN, too few samples, bad constants.
+/// The signals of a run checked where it entered (estimation/run_checks.hpp).
+[[nodiscard]] RunSignals run_signals(const CheckedRun& run);
+/// The signals of a run the simulator just made (a re-simulation): it enters here, so it is checked
+/// here (check_run throws EmadiagError on NaN, too few samples, bad constants).
 [[nodiscard]] RunSignals run_signals(const Run& run);
 /// run_signals without check_run, for samples that need no check: a re-simulation's
 /// (resimulation.hpp), made by the simulator (finite, evenly spaced) with the constants and length of

@@ -59,7 +59,7 @@ void baseline_stage(Context& ctx) {
     rep.total_samples = rep.samples;
     rep.analysed_end_s = run.samples.empty() ? 0.0 : run.samples.back().t_s;
 
-    const HealthEstimate est = estimate_physics(run);
+    const HealthEstimate est = estimate_physics(ctx.checked);
     sim::EmaParams& p = ctx.params;
     p = resim_config(run, sim::EmaParams::datasheet()).params;
     auto& health = rep.model.health;
@@ -93,7 +93,7 @@ void baseline_stage(Context& ctx) {
     const std::vector<char>& mask = ctx.mask;
     const auto compared = static_cast<std::size_t>(std::count(mask.begin(), mask.end(), char{1}));
     if (compared < kMinScreenSamples) {
-        throw EmadiagError("discovery: the " + run.sequence + " run has " + std::to_string(compared) +
+        throw EmadiagError("discovery: the " + sim::to_string(run.sequence) + " run has " + std::to_string(compared) +
                            " comparison samples (slipping in the run and the model); at least " +
                            std::to_string(kMinScreenSamples) +
                            " are needed (a BRK run barely moves: use a DYN or sweep run; given with a DYN run of the same actuator, "

@@ -14,10 +14,12 @@
 namespace emadiag::discovery::pipeline {
 
 struct Context {
-    Context(const Run& r, const DiscoveryOptions& o) : run(r), options(o), signals(run_signals(r)) {}
+    Context(const Run& r, const DiscoveryOptions& o)
+        : run(r), options(o), checked(check_run(r)), signals(run_signals(checked)) {}
 
     const Run& run;
     const DiscoveryOptions& options;
+    const CheckedRun checked;        ///< the run (or its window) checked once, where it enters the analysis
     const RunSignals signals;        ///< the run's measured signals
     std::vector<char> mask;          ///< the samples compared (comparison_mask with the baseline)
     NoiseFloor floor;                ///< the run's own noise floor

@@ -56,8 +56,8 @@ TEST(Recorder, DynRunMatchesDirectSimulationAndTheLogDecodesToTheSameRun) {
     EXPECT_EQ(out.stats.frames_lost, 0u);
     EXPECT_EQ(out.stats.crc_failures, 0u);
     EXPECT_EQ(out.stats.counter_gaps, 0u);
-    EXPECT_EQ(out.run.sequence, "dyn");
-    EXPECT_EQ(out.run.load_case, "B");
+    EXPECT_EQ(out.run.sequence, sim::Sequence::Dyn);
+    EXPECT_EQ(out.run.load_case, sim::LoadCase::B);
     EXPECT_EQ(out.run.constants.tau, 800.0);
 
     sim::SimConfig direct = config(sim::Sequence::Dyn, 42).sim;

@@ -79,7 +79,7 @@ TEST(SessionDecoder, CountsLossCrcCounterGapsAndDuplicatesAndNeverInterpolates) 
         EXPECT_NE(k, 20);
         EXPECT_NEAR(s.current_a, 0.01 * static_cast<double>(k), 1e-3);
     }
-    EXPECT_EQ(run.load_case, "A-ext");
+    EXPECT_EQ(run.load_case, emadiag::sim::LoadCase::AExt);
     EXPECT_EQ(run.meta_value("valid"), std::optional<std::string>("false"));
     EXPECT_THAT(run.meta_value("invalid_reason").value_or(""), HasSubstr("telemetry loss 5 % above 0.1 %"));
     EXPECT_EQ(run.meta_value("status"), std::optional<std::string>("complete"));

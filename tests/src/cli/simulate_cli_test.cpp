@@ -26,8 +26,8 @@ TEST(SimulateCli, WritesARunCsvAndPrintsTheSummary) {
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_THAT(r.output, HasSubstr("wrote 1600 samples"));
     const auto run_back = emadiag::read_run_csv_file(csv);
-    EXPECT_EQ(run_back.load_case, "A");
-    EXPECT_EQ(run_back.sequence, "brk");
+    EXPECT_EQ(run_back.load_case, emadiag::sim::LoadCase::A);
+    EXPECT_EQ(run_back.sequence, emadiag::sim::Sequence::Brk);
     EXPECT_EQ(run_back.meta_value("true_FDJ_Nm").value(), "0.070000000000000007");
     EXPECT_EQ(run_back.meta_value("effect_viscous").value(), "1.0000000000000001e-05");
     EXPECT_EQ(run_back.meta_value("noise").value(), "typical");

@@ -46,8 +46,8 @@ TEST(RunCsv, WriteThenReadGivesBackTheSameData) {
     EXPECT_EQ(back.constants.j_kgm2, 1.65e-4);
     EXPECT_EQ(back.constants.tau, 800.0);
     EXPECT_EQ(back.constants.sample_period_s, 5e-4);
-    EXPECT_EQ(back.load_case, "B");
-    EXPECT_EQ(back.sequence, "dyn");
+    EXPECT_EQ(back.load_case, sim::LoadCase::B);
+    EXPECT_EQ(back.sequence, sim::Sequence::Dyn);
     ASSERT_EQ(back.extra_columns.size(), 1U);
     EXPECT_EQ(back.extra_columns[0].second[3], 1.0 / 3.0);
 }

@@ -87,7 +87,7 @@ TEST_F(TestRun, HealthyEmaIsServiceableAndEverythingIsStoredUnderTheTail) {
     // eta is not identifiable on the ground (case A): listed, not assessed.
     bool eta_listed = false;
     for (const auto& f : r.assessment.findings)
-        if (f.parameter == kParamEtaO && f.estimator == "physics:dyn") eta_listed = f.status == FindingStatus::NotIdentifiable;
+        if (f.parameter == kParamEtaO && to_string(f.estimator) == "physics:dyn") eta_listed = f.status == FindingStatus::NotIdentifiable;
     EXPECT_TRUE(eta_listed);
 
     db::Database database(o.db_path);

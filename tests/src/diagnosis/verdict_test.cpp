@@ -19,11 +19,11 @@ ParameterEstimate unidentifiable(const char* name) { return {name, std::nullopt,
 
 AssessedRun run(const std::string& seq, std::vector<ParameterEstimate> physics, std::vector<ParameterEstimate> network = {}) {
     AssessedRun r;
-    r.sequence = seq;
+    r.sequence = sim::parse_sequence(seq);
     r.valid = true;
     RunEstimates e;
-    e.estimates.push_back({"physics", std::move(physics), {}});
-    if (!network.empty()) e.estimates.push_back({"network", std::move(network), {}});
+    e.estimates.push_back({EstimatorMethod::Physics, std::move(physics), {}});
+    if (!network.empty()) e.estimates.push_back({EstimatorMethod::Network, std::move(network), {}});
     r.estimates = e;
     return r;
 }
@@ -92,9 +92,9 @@ TEST(Verdict, HealthyFrictionWithEtaNotIdentifiableIsServiceable) {
                           kLimits);
     EXPECT_EQ(a.verdict, Verdict::Serviceable) << a.reason;
     ASSERT_EQ(a.findings.size(), 5u);
-    EXPECT_EQ(a.findings[0].estimator, "physics:dyn");
+    EXPECT_EQ(to_string(a.findings[0].estimator), "physics:dyn");
     EXPECT_EQ(a.findings[1].status, FindingStatus::NotIdentifiable);
-    EXPECT_EQ(a.findings[4].estimator, "physics:brk");
+    EXPECT_EQ(to_string(a.findings[4].estimator), "physics:brk");
     EXPECT_EQ(a.findings[4].status, FindingStatus::Within);
 }
 

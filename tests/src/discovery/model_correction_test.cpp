@@ -7,6 +7,7 @@
 #include "discovery/model/model_correction.hpp"
 #include "estimation/health_estimate.hpp"
 #include "estimation/physics_estimator.hpp"
+#include "estimation/run_checks.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -65,8 +66,8 @@ TEST(ModelCorrection, ATermAsDataReducesTheResidualOfARunWithTheEffect) {
         {"terms", {{{"target", "torque"}, {"basis", "sgn(w)*abs(theta_u)"}, {"coefficient", 0.01}, {"std_error", 2e-4}}}}};
     const dc::ModelCorrection c = dc::model_correction(read_model(model));
     ASSERT_EQ(c.terms.size(), 1u);
-    const auto before = emadiag::estimate_physics(run);
-    const auto after = emadiag::estimate_physics(dc::remove_model_effects(run, c));
+    const auto before = emadiag::estimate_physics(emadiag::check_run(run));
+    const auto after = emadiag::estimate_physics(emadiag::check_run(dc::remove_model_effects(run, c)));
     const double r_before = diagnostic(before, "residual_scale_Nm");
     const double r_after = diagnostic(after, "residual_scale_Nm");
     std::cout << "residual scale " << r_before << " -> " << r_after << " N m; FDJ " << fdj(before) << " -> "
@@ -75,8 +76,8 @@ TEST(ModelCorrection, ATermAsDataReducesTheResidualOfARunWithTheEffect) {
     EXPECT_LT(std::abs(fdj(after) - kTrueFdjNm), 0.5 * std::abs(fdj(before) - kTrueFdjNm));
     // On a run without the effect, the same model makes the residual worse: the test can fail.
     const emadiag::Run clean = run_with(sim::EmaParams::datasheet());
-    EXPECT_GT(diagnostic(emadiag::estimate_physics(dc::remove_model_effects(clean, c)), "residual_scale_Nm"),
-              diagnostic(emadiag::estimate_physics(clean), "residual_scale_Nm"));
+    EXPECT_GT(diagnostic(emadiag::estimate_physics(emadiag::check_run(dc::remove_model_effects(clean, c))), "residual_scale_Nm"),
+              diagnostic(emadiag::estimate_physics(emadiag::check_run(clean)), "residual_scale_Nm"));
 }
 
 TEST(ModelCorrection, ALibraryEffectIsRemovedAsItsTerm) {
@@ -88,14 +89,14 @@ TEST(ModelCorrection, ALibraryEffectIsRemovedAsItsTerm) {
                                   {"terms", {{{"effect", "viscous_nm_s_rad"}, {"value", 8e-5}, {"std_error", 1e-6}}}}};
     const dc::ModelCorrection c = dc::model_correction(read_model(model));
     EXPECT_EQ(c.text(), "torque: 8e-05*w");
-    const auto before = emadiag::estimate_physics(run);
-    const auto after = emadiag::estimate_physics(dc::remove_model_effects(run, c));
+    const auto before = emadiag::estimate_physics(emadiag::check_run(run));
+    const auto after = emadiag::estimate_physics(emadiag::check_run(dc::remove_model_effects(run, c)));
     EXPECT_LT(diagnostic(after, "residual_scale_Nm"), 0.5 * diagnostic(before, "residual_scale_Nm"));
     EXPECT_LT(std::abs(fdj(after) - kTrueFdjNm), 0.5 * std::abs(fdj(before) - kTrueFdjNm));
     // With typical noise, FDJ still moves back to the truth.
     const emadiag::Run noisy = run_with(truth, sim::NoiseProfile::Typical);
-    const double fdj_before = fdj(emadiag::estimate_physics(noisy));
-    const double fdj_after = fdj(emadiag::estimate_physics(dc::remove_model_effects(noisy, c)));
+    const double fdj_before = fdj(emadiag::estimate_physics(emadiag::check_run(noisy)));
+    const double fdj_after = fdj(emadiag::estimate_physics(emadiag::check_run(dc::remove_model_effects(noisy, c))));
     std::cout << "typical noise: FDJ " << fdj_before << " -> " << fdj_after << " N m (truth " << kTrueFdjNm << ")\n";
     EXPECT_LT(std::abs(fdj_after - kTrueFdjNm), 0.5 * std::abs(fdj_before - kTrueFdjNm));
 }

@@ -7,6 +7,7 @@
 #include "estimation/breakaway.hpp"
 #include "estimation/dataset.hpp"
 #include "estimation/physics_estimator.hpp"
+#include "estimation/run_checks.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -81,7 +82,7 @@ TEST(Breakaway, FsjWithinOnePercentWithNoiseNoneAcrossTheWholeRange) {
     const std::uint64_t seed = test_seed();
     SCOPED_TRACE("seed " + std::to_string(seed) + " (set EMADIAG_TEST_SEED to change)");
     for (const auto& c : brk_runs(range_params(16, seed), sim::NoiseProfile::None, seed)) {
-        const HealthEstimate h = estimate_physics(c.run);
+        const HealthEstimate h = estimate_physics(check_run(c.run));
         const auto* fsj = h.find(kParamFsj);
         ASSERT_TRUE(fsj && fsj->value) << (fsj ? fsj->note : "missing");
         const double truth = c.config.params.fsj_nm;
@@ -117,7 +118,7 @@ TEST(Breakaway, TypicalNoiseIsWithinItsUncertaintyAndWithinThreePercentWhereObse
     const std::uint64_t seed = test_seed() + 5;
     SCOPED_TRACE("seed " + std::to_string(seed));
     for (const auto& c : brk_runs(range_params(16, seed), sim::NoiseProfile::Typical, seed)) {
-        const HealthEstimate h = estimate_physics(c.run);
+        const HealthEstimate h = estimate_physics(check_run(c.run));
         const auto* fsj = h.find(kParamFsj);
         ASSERT_TRUE(fsj && fsj->value);
         const double truth = c.config.params.fsj_nm;
@@ -154,7 +155,7 @@ TEST(Breakaway, AStickSlipStartSaysFsjIsBoundedNotMeasured) {
     clear.fdj_nm = 0.070;
     clear.fsj_nm = 0.130;
     const auto cases = brk_runs({hidden, clear}, sim::NoiseProfile::Typical, 3);
-    const HealthEstimate h0 = estimate_physics(cases[0].run), h1 = estimate_physics(cases[1].run);
+    const HealthEstimate h0 = estimate_physics(check_run(cases[0].run)), h1 = estimate_physics(check_run(cases[1].run));
     const auto* fsj0 = h0.find(kParamFsj);
     const auto* fsj1 = h1.find(kParamFsj);
     ASSERT_TRUE(fsj0 && fsj0->value && fsj1 && fsj1->value);
@@ -215,7 +216,7 @@ TEST(Breakaway, ATooShortRunIsAClearError) {
     EXPECT_THROW((void)analyse_breakaways(cases[0].run), EmadiagError);
     auto c2 = brk_runs({sim::EmaParams::datasheet()}, sim::NoiseProfile::None, 1);
     c2[0].run.samples.resize(180);  // 90 ms: the first ramp has not broken away yet
-    EXPECT_THAT([&] { (void)estimate_physics(c2[0].run); },
+    EXPECT_THAT([&] { (void)estimate_physics(check_run(c2[0].run)); },
                 ::testing::ThrowsMessage<EmadiagError>(HasSubstr("no breakaway event found")));
 }
 

@@ -77,7 +77,7 @@ TEST(DatasetTest, GenerationIsDeterministicAndFilters) {
     // Runs expose analysis metadata only.
     const emadiag::Run r = a.run(3);
     EXPECT_FALSE(r.meta_value("true_FDJ_Nm"));
-    EXPECT_EQ(r.load_case, "B");
+    EXPECT_EQ(r.load_case, emadiag::sim::LoadCase::B);
     EXPECT_EQ(*r.meta_value("noise"), "typical");
 }
 

@@ -234,7 +234,7 @@ TEST_P(ShippedModelTest, LoadsAndPredictsASimulatedRunWithinItsUncertainty) {
     const emadiag::Run run = make_run(c, sim::simulate(c));
     const HealthEstimate h = model.estimate(run);
     EXPECT_THAT(h.find(kParamFdj)->note, ::testing::Not(HasSubstr("understated")));
-    EXPECT_EQ(h.estimator, "network");
+    EXPECT_EQ(to_string(h.estimator), "network");
     ASSERT_EQ(h.parameters.size(), 4u);
     // Within 4 calibrated standard errors (a 95 % interval is 1.96).
     constexpr double kSigmas = 4.0;

@@ -5,6 +5,7 @@
 #include "emadiag/sim/simulator.hpp"
 #include "estimation/dataset.hpp"
 #include "estimation/physics_estimator.hpp"
+#include "estimation/run_checks.hpp"
 #include "estimation/physics_wrls.hpp"
 
 #include <gmock/gmock.h>
@@ -75,8 +76,8 @@ TEST(PhysicsEstimator, RecoversFdjAndEtaWithin0p1PercentOnNoiselessCaseBRuns) {
     SCOPED_TRACE("seed " + std::to_string(seed) + " (set EMADIAG_TEST_SEED to change)");
     for (const auto& [truth, run] : seeded_runs(sim::LoadCase::B, sim::Sequence::Dyn, sim::NoiseProfile::None,
                                                 kRunsPerProperty, seed)) {
-        const HealthEstimate h = estimate_physics(run);
-        EXPECT_EQ(h.estimator, "physics");
+        const HealthEstimate h = estimate_physics(check_run(run));
+        EXPECT_EQ(to_string(h.estimator), "physics");
         EXPECT_TRUE(within_rel(h.find(kParamFdj), truth.fdj_nm, kNoiselessRelTolerance));
         EXPECT_TRUE(within_rel(h.find(kParamEtaO), truth.eta_o, kNoiselessRelTolerance));
         EXPECT_TRUE(within_rel(h.find(kParamEtaA), truth.eta_a, kNoiselessRelTolerance));
@@ -96,8 +97,8 @@ TEST(PhysicsEstimator, EmbeddedReconstructionErrorIsExactForACubicSpeed) {
     auto w_second = [](double t) { return -40000.0 + 180000.0 * t; };
     emadiag::Run run;
     run.constants = {kKt, kJ, 800.0, kT};
-    run.load_case = "B";
-    run.sequence = "dyn";
+    run.load_case = emadiag::sim::LoadCase::B;
+    run.sequence = emadiag::sim::Sequence::Dyn;
     for (int k = 1; k <= 200; ++k) {
         const double t1 = k * kT, t0 = t1 - kT;
         RunSample smp;
@@ -126,7 +127,7 @@ TEST(PhysicsEstimator, FlagsEtaAsNotIdentifiableInCaseA) {
     const std::uint64_t seed = test_seed() + 1;
     SCOPED_TRACE("seed " + std::to_string(seed));
     for (const auto& [truth, run] : seeded_runs(sim::LoadCase::A, sim::Sequence::Dyn, sim::NoiseProfile::None, 6, seed)) {
-        const HealthEstimate h = estimate_physics(run);
+        const HealthEstimate h = estimate_physics(check_run(run));
         for (const char* name : {kParamEtaO, kParamEtaA}) {
             const auto* p = h.find(name);
             ASSERT_NE(p, nullptr);
@@ -144,14 +145,14 @@ TEST(PhysicsEstimator, FlagsEtaAsNotIdentifiableInCaseA) {
 TEST(PhysicsEstimator, IdentifiesEtaInExtendedCaseAAndOnASweep) {
     for (const auto& [lc, seq] : {std::pair{sim::LoadCase::AExt, sim::Sequence::Dyn},
                                   std::pair{sim::LoadCase::B, sim::Sequence::Sweep}}) {
-        const HealthEstimate h = estimate_physics(nominal_run(lc, seq));
+        const HealthEstimate h = estimate_physics(check_run(nominal_run(lc, seq)));
         EXPECT_TRUE(within_rel(h.find(kParamEtaO), 0.85, kNoiselessRelTolerance)) << sim::to_string(lc);
         EXPECT_TRUE(within_rel(h.find(kParamFdj), 0.08, kNoiselessRelTolerance)) << sim::to_string(lc);
     }
 }
 
 TEST(PhysicsEstimator, SaysFsjNeedsABrkRunOnDynRuns) {
-    const HealthEstimate h = estimate_physics(nominal_run());
+    const HealthEstimate h = estimate_physics(check_run(nominal_run()));
     const auto* fsj = h.find(kParamFsj);
     ASSERT_NE(fsj, nullptr);
     EXPECT_FALSE(fsj->value);
@@ -160,12 +161,12 @@ TEST(PhysicsEstimator, SaysFsjNeedsABrkRunOnDynRuns) {
 
 TEST(PhysicsEstimator, NeverReadsTheTrueOrEffectMetadata) {
     emadiag::Run run = nominal_run();
-    const HealthEstimate a = estimate_physics(run);
+    const HealthEstimate a = estimate_physics(check_run(run));
     for (auto& [k, v] : run.meta) {
         if (k.rfind("true_", 0) == 0) v = "0.5";
     }
     run.set_meta("effect_viscous_nm_s_rad", "3");
-    const HealthEstimate b = estimate_physics(run);
+    const HealthEstimate b = estimate_physics(check_run(run));
     for (std::size_t i = 0; i < a.parameters.size(); ++i) {
         EXPECT_EQ(a.parameters[i].value, b.parameters[i].value) << a.parameters[i].name;
         EXPECT_EQ(a.parameters[i].std_error, b.parameters[i].std_error) << a.parameters[i].name;
@@ -175,7 +176,7 @@ TEST(PhysicsEstimator, NeverReadsTheTrueOrEffectMetadata) {
 TEST(PhysicsEstimator, TooFewSlippingSamplesIsAClearError) {
     emadiag::Run run = nominal_run();
     run.samples.resize(40);  // 20 ms: the shaft is still accelerating at the current limit
-    EXPECT_THAT([&] { (void)estimate_physics(run); },
+    EXPECT_THAT([&] { (void)estimate_physics(check_run(run)); },
                 ThrowsMessage<EmadiagError>(AllOf(HasSubstr("too few slipping samples"), HasSubstr("need at least"))));
 }
 
@@ -183,7 +184,7 @@ TEST(PhysicsEstimator, ANanNamesTheRowAndColumn) {
     emadiag::Run run = nominal_run();
     run.samples[11].current_a = std::numeric_limits<double>::quiet_NaN();
     run.samples[500].hinge_moment_nm = std::numeric_limits<double>::infinity();
-    EXPECT_THAT([&] { (void)estimate_physics(run); },
+    EXPECT_THAT([&] { (void)estimate_physics(check_run(run)); },
                 ThrowsMessage<EmadiagError>(AllOf(HasSubstr("2 problems"), HasSubstr("sample row 12 (t_s=0.006): current_A is nan"),
                                                   HasSubstr("sample row 501"), HasSubstr("hinge_moment_Nm is inf"))));
 }
@@ -191,7 +192,7 @@ TEST(PhysicsEstimator, ANanNamesTheRowAndColumn) {
 TEST(PhysicsEstimator, TimeThatDoesNotIncreaseNamesTheRow) {
     emadiag::Run run = nominal_run();
     run.samples[99].t_s = run.samples[98].t_s;
-    EXPECT_THAT([&] { (void)estimate_physics(run); },
+    EXPECT_THAT([&] { (void)estimate_physics(check_run(run)); },
                 ThrowsMessage<EmadiagError>(HasSubstr("sample row 100 (t_s=0.0495): time does not increase")));
 }
 
@@ -199,7 +200,7 @@ TEST(PhysicsEstimator, MissingConstantsAreNamed) {
     emadiag::Run run = nominal_run();
     run.constants.j_kgm2 = 0;
     run.constants.tau = std::numeric_limits<double>::quiet_NaN();
-    EXPECT_THAT([&] { (void)estimate_physics(run); },
+    EXPECT_THAT([&] { (void)estimate_physics(check_run(run)); },
                 ThrowsMessage<EmadiagError>(AllOf(HasSubstr("constant J_kgm2 is missing or not positive"),
                                                   HasSubstr("constant tau is missing"), HasSubstr("# J_kgm2=..."))));
 }
