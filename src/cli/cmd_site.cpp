@@ -36,6 +36,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -255,16 +256,19 @@ Totals write_site(const SiteCliOptions& o, const fs::path& root) {
     std::mutex mutex;
     std::atomic<std::size_t> next{0};
     std::string first_error;
-    const auto work = [&] {
+    // A connection per thread; the calling thread keeps the one it has (each open checks the file).
+    const auto work = [&](db::RecordSource* given) {
         try {
-            db::OpenedSource own = db::open_record_source(o.db);  // a connection per thread
+            std::optional<db::OpenedSource> opened;
+            if (given == nullptr) opened.emplace(db::open_record_source(o.db));
+            db::RecordSource& source = given != nullptr ? *given : *opened->source;
             for (std::size_t i = next++; i < tails.size(); i = next++) {
                 {
                     const std::lock_guard<std::mutex> lock(mutex);
                     if (!first_error.empty()) return;
                 }
                 const std::string& tail = tails[i];
-                const pg::FleetRecord record = pg::build_fleet_record(*own.source, tail, o.record);
+                const pg::FleetRecord record = pg::build_fleet_record(source, tail, o.record);
                 TailPage page;
                 page.file = site_tail_file_name(tail);
                 for (std::size_t k = 0; k < record.positions.size(); ++k) page.position_anchor[record.positions[k].key] = "position-" + std::to_string(k + 1);
@@ -284,8 +288,8 @@ Totals write_site(const SiteCliOptions& o, const fs::path& root) {
     std::vector<std::thread> pool;
     const unsigned wanted = o.threads != 0 ? o.threads : std::max(1u, std::thread::hardware_concurrency());
     const unsigned n = std::max(1u, std::min<unsigned>(wanted, static_cast<unsigned>(std::max<std::size_t>(1, tails.size()))));
-    for (unsigned t = 1; t < n; ++t) pool.emplace_back(work);
-    work();
+    for (unsigned t = 1; t < n; ++t) pool.emplace_back(work, nullptr);
+    work(database.source.get());
     for (auto& t : pool) t.join();
     if (!first_error.empty()) throw EmadiagError("site: " + first_error);
 

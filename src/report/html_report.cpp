@@ -102,9 +102,11 @@ void check_parameter(const ReportParameter& p, const std::string& where) {
     check_number(p.nominal, at + " nominal");
     if (p.limit) check_number(p.limit->value, at + " limit");
     for (std::size_t i = 0; i < p.points.size(); ++i) {
-        check_number(p.points[i].x, at + " points[" + std::to_string(i) + "].x");
-        check_number(p.points[i].value, at + " points[" + std::to_string(i) + "].value");
-        check_number(p.points[i].std_error, at + " points[" + std::to_string(i) + "].std_error");
+        const ReportPoint& q = p.points[i];
+        if (std::isfinite(q.x) && std::isfinite(q.value) && std::isfinite(q.std_error)) continue;  // the names only for a bad one
+        check_number(q.x, at + " points[" + std::to_string(i) + "].x");
+        check_number(q.value, at + " points[" + std::to_string(i) + "].value");
+        check_number(q.std_error, at + " points[" + std::to_string(i) + "].std_error");
     }
     if (p.crossing_x) check_number(*p.crossing_x, at + " crossing_x");
     if (p.fit) {
@@ -114,6 +116,9 @@ void check_parameter(const ReportParameter& p, const std::string& where) {
                                std::to_string(c.lower.size()) + " lower and " + std::to_string(c.upper.size()) + " upper values");
         }
         for (std::size_t i = 0; i < c.x.size(); ++i) {
+            if (std::isfinite(c.x[i]) && std::isfinite(c.mean[i]) && std::isfinite(c.lower[i]) && std::isfinite(c.upper[i]) &&
+                c.lower[i] <= c.mean[i] && c.mean[i] <= c.upper[i])
+                continue;  // the names only for a bad one
             const std::string fi = at + " fit[" + std::to_string(i) + "]";
             check_number(c.x[i], fi + ".x");
             check_number(c.mean[i], fi + ".mean");
