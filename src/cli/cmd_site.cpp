@@ -13,7 +13,6 @@
 // other than [A-Za-z0-9-] as _XX (hex), so no name can leave tails/ or collide with another.
 #include "cli/command.hpp"
 #include "cli/db_source.hpp"
-#include "cli/output_file.hpp"
 #include "cli/site_file_name.hpp"
 
 #include "core/emadiag_error.hpp"
@@ -23,12 +22,15 @@
 #include "report/html_report.hpp"
 #include "report/record_adapter.hpp"
 
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <cstdlib>
 #include <filesystem>
 #include <iomanip>
@@ -66,6 +68,38 @@ struct SiteCliOptions {
     unsigned threads = 0;           ///< 0: one per core
 };
 
+/// One new file of the site in its fresh staging folder: written plainly (no temporary, no fsync of
+/// its own; the staging folder is fresh and nothing else writes there). sync_site flushes them all
+/// at once before the site is moved into place.
+void write_site_file(const fs::path& path, const std::string& text) {
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    if (fd < 0) throw EmadiagError("site: cannot create " + path.string() + ": " + std::strerror(errno));
+    std::size_t done = 0;
+    while (done < text.size()) {
+        const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) {
+            const int e = errno;
+            ::close(fd);
+            throw EmadiagError("site: cannot write " + path.string() + " (" + std::to_string(done) + " of " + std::to_string(text.size()) +
+                               " bytes): " + std::strerror(e));
+        }
+        done += static_cast<std::size_t>(n);
+    }
+    if (::close(fd) != 0) throw EmadiagError("site: cannot write " + path.string() + " (close): " + std::strerror(errno));
+}
+
+/// Every file of the staging folder on disk (one syncfs for the thousands of pages, instead of an
+/// fsync each) before the folder is renamed into place.
+void sync_site(const fs::path& dir) {
+    const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd < 0) throw EmadiagError("site: cannot open " + dir.string() + " to flush it: " + std::strerror(errno));
+    const int rc = ::syncfs(fd);
+    const int e = errno;
+    ::close(fd);
+    if (rc != 0) throw EmadiagError("site: cannot flush " + dir.string() + " to disk (syncfs): " + std::strerror(e));
+}
+
 /// What the index needs of each tail's page: its file and the anchor of each position's section.
 struct TailPage {
     std::string file;
@@ -99,7 +133,7 @@ report::HtmlOptions write_lists(const report::ReportDocument& d, const report::H
             }
         const std::string file = list_file_name(page.file, anchor);
         const std::string csv = report::sessions_csv(s);
-        write_output((folder / file).string(), csv);
+        write_site_file(folder / file, csv);
         ++page.lists;
         page.list_bytes += csv.size();
         opt.full_history_href[anchor] = file;
@@ -111,6 +145,7 @@ report::HtmlOptions write_lists(const report::ReportDocument& d, const report::H
 }
 
 std::string esc(const std::string& s) { return report::html_escape(s); }
+
 
 std::string days(const std::optional<double>& v) {
     if (!v) return "beyond horizon";
@@ -275,7 +310,7 @@ Totals write_site(const SiteCliOptions& o, const fs::path& root) {
                 const report::ReportDocument document = report::from_fleet_record(record, {generated, EMADIAG_VERSION, o.db});
                 const report::HtmlOptions options = write_lists(document, o.history, root / kTailFolder, page);
                 const std::string html = with_navigation(report::render_html(document, options), tail);
-                write_output((root / kTailFolder / page.file).string(), html);
+                write_site_file(root / kTailFolder / page.file, html);
                 page.bytes = html.size();
                 const std::lock_guard<std::mutex> lock(mutex);
                 pages.emplace(tail, std::move(page));
@@ -300,8 +335,8 @@ Totals write_site(const SiteCliOptions& o, const fs::path& root) {
         totals.lists += page.lists;
     }
     const std::string index = index_html(rows, tails, pages, generated, o);
-    write_output((root / kIndexFile).string(), index);
-    write_output((root / kSiteMarker).string(), std::string("emadiag site ") + EMADIAG_VERSION + "\n");
+    write_site_file(root / kIndexFile, index);
+    write_site_file(root / kSiteMarker, std::string("emadiag site ") + EMADIAG_VERSION + "\n");
     totals.files += 1;
     totals.bytes += index.size();
     return totals;
@@ -340,6 +375,7 @@ const bool registered = register_command(Command{
             Totals totals;
             try {
                 totals = write_site(*o, staging);
+                sync_site(staging);
                 std::error_code ec;
                 if (fs::exists(fs::symlink_status(out, ec))) {
                     check_replaceable(out);  // again: nothing foreign appeared meanwhile
