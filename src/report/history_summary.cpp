@@ -23,6 +23,20 @@ struct Column {
     std::size_t n = 0;
 };
 
+/// io::csv_field of `s` appended to `out`; a cell of plain ASCII (letters, digits, space and . : _ / ( ) -
+/// # not first) is what csv_field would return for it, and is appended as it is without the cost.
+void append_cell(std::string& out, const std::string& s) {
+    const auto plain = [](char c) {
+        return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == ' ' || c == '.' || c == ':' || c == '_' ||
+               c == '/' || c == '(' || c == ')' || c == '-' || c == '#';
+    };
+    if (s.empty() || (s[0] != '-' && std::all_of(s.begin(), s.end(), plain))) {
+        out += s;
+        return;
+    }
+    out += io::csv_field(s);
+}
+
 std::string cell_number(double v, const char* format) {
     char buf[64];
     std::snprintf(buf, sizeof buf, format, v);
@@ -105,7 +119,7 @@ std::string sessions_csv(const ReportSection& s) {
     out.reserve(out.size() + s.sessions.size() * 160);
     for (const auto& x : s.sessions) {
         for (const std::string* f : {&x.id, &x.started_utc, &x.tail_number, &x.position, &x.serial, &x.phase, &x.kind, &x.operator_id}) {
-            out += io::csv_field(*f);
+            append_cell(out, *f);
             out += ',';
         }
         out += x.cycles ? cell_number(*x.cycles, "%.0f") : std::string();
@@ -113,7 +127,7 @@ std::string sessions_csv(const ReportSection& s) {
         out += x.hours ? cell_number(*x.hours, "%.6g") : std::string();
         for (const std::string* f : {&x.verdict, &x.note, &x.tool_version}) {
             out += ',';
-            out += io::csv_field(*f);
+            append_cell(out, *f);
         }
         out += '\n';
     }

@@ -3,6 +3,7 @@
 // sessions and every one that is not SERVICEABLE with the one after it, draws those points and both
 // points of each limit crossing as measured, holds every earlier bar inside the envelope, says what was
 // summarised and links (or names) where every session is; the CSV holds every session.
+#include "emadiag/io/text_field.hpp"
 #include "estimation/health_estimate.hpp"
 #include "report/history_summary.hpp"
 #include "report/html_report.hpp"
@@ -167,6 +168,29 @@ TEST(HistorySummary, CsvHoldsEverySessionQuotedAndDefused) {
     EXPECT_THAT(csv, HasSubstr(",'=cmd|' /C calc'!A0,"));
     EXPECT_THAT(csv, HasSubstr("\n1005,2026-01-01T00:00:00Z,N1,LH-ELEV,SN-1,,,,5,12.5,SERVICEABLE,,\n"));
     EXPECT_THAT(csv, HasSubstr("\n1449,"));
+}
+
+TEST(HistorySummary, CsvCellsAreThoseOfTheToolsCsvWriter) {
+    // sessions_csv appends plain cells as they are: the same bytes as io::csv_field for any text.
+    const std::vector<std::string> texts = {"",         "LH-ELEV",   "2026-01-01T06:00:00Z", "-1.5",      "-x",         "+1",
+                                            "@a",       "=1+1",      "a,b",                  "say \"hi\"", "tab\there", "line\nbreak",
+                                            "caf\xc3\xa9", "\xff\xfe", "emadiag 0.1.0 (git 60705b1, Release)", "J. Doe (CERT-1); note #3",
+                                            "a/b_c:d",  " lead"};
+    ReportSection s = section(0);
+    for (const auto& t : texts) {
+        ReportSession x;
+        x.id = x.started_utc = x.tail_number = x.position = x.serial = x.phase = x.kind = x.operator_id = x.verdict = x.note = x.tool_version = t;
+        s.sessions.push_back(x);
+    }
+    const std::string csv = sessions_csv(s);
+    std::istringstream lines(csv);
+    std::string line;
+    std::getline(lines, line);  // the header
+    for (const auto& t : texts) {
+        ASSERT_TRUE(std::getline(lines, line)) << t;
+        const std::string c = io::csv_field(t);
+        EXPECT_EQ(line, c + "," + c + "," + c + "," + c + "," + c + "," + c + "," + c + "," + c + ",,," + c + "," + c + "," + c) << t;
+    }
 }
 
 }  // namespace
