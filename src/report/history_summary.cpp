@@ -5,7 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
+#include <charconv>
 #include <limits>
 
 namespace emadiag::report {
@@ -37,10 +37,13 @@ void append_cell(std::string& out, const std::string& s) {
     out += io::csv_field(s);
 }
 
-std::string cell_number(double v, const char* format) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, format, v);
-    std::string s = buf;
+/// A number of a session list: fixed without decimals (cycles) or 6 significant digits (hours), the bytes
+/// of printf's "%.0f" and "%.6g" (std::to_chars formats as printf does); "-0" is written "0".
+std::string cell_number(double v, bool whole) {
+    char buf[512];  // room for any double in %.0f
+    const auto r = whole ? std::to_chars(buf, buf + sizeof buf, v, std::chars_format::fixed, 0)
+                         : std::to_chars(buf, buf + sizeof buf, v, std::chars_format::general, 6);
+    std::string s(buf, r.ptr);
     if (s == "-0") s = "0";
     return s;
 }
@@ -122,9 +125,9 @@ std::string sessions_csv(const ReportSection& s) {
             append_cell(out, *f);
             out += ',';
         }
-        out += x.cycles ? cell_number(*x.cycles, "%.0f") : std::string();
+        out += x.cycles ? cell_number(*x.cycles, true) : std::string();
         out += ',';
-        out += x.hours ? cell_number(*x.hours, "%.6g") : std::string();
+        out += x.hours ? cell_number(*x.hours, false) : std::string();
         for (const std::string* f : {&x.verdict, &x.note, &x.tool_version}) {
             out += ',';
             append_cell(out, *f);
