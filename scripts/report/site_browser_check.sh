@@ -8,11 +8,14 @@
 #   3. headless Chromium loads the index and every tail page from file:// URLs: no console message,
 #      and every link of the DOM it built resolves (site_check.py dom); screenshots of the index and
 #      of one tail page;
-#   4. writing safely: a second run replaces the site; a folder holding a file the tool did not write
+#   4. the same fleet with --full-history-max 6: the tail pages summarise their long sections and link
+#      the CSV list of every session (site_check.py files: every list linked, as many sessions as the
+#      page says); the browser's DOM of a summarised page and its screenshot;
+#   5. writing safely: a second run replaces the site; a folder holding a file the tool did not write
 #      is refused and left as it was.
 # Usage: site_browser_check.sh [EMADIAG_BINARY [OUT_DIR [SCREENSHOT_DIR]]]
-#   (defaults build/src/emadiag, a temp directory; SCREENSHOT_DIR: copies site-index.png and
-#   site-tail.png there). Exits non-zero on any failure.
+#   (defaults build/src/emadiag, a temp directory; SCREENSHOT_DIR: copies site-index.png,
+#   site-tail.png and site-tail-paged.png there). Exits non-zero on any failure.
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -86,6 +89,28 @@ for s in site-index site-tail; do
 done
 python3 "$here/report_checks.py" png "$out/site-tail.png" || fail "the tail page's screenshot does not show the plots"
 
+echo "== long histories summarised (--full-history-max 6 --recent-sessions 3 over the same fleet)"
+paged="$out/site-paged"
+rm -rf "$paged"
+"$emadiag" site --db "$db" --out "$paged" --full-history-max 6 --recent-sessions 3 2>"$out/site-paged.txt" || fail "site --full-history-max 6: $(cat "$out/site-paged.txt")"
+cat "$out/site-paged.txt"
+# N123EM's two positions (8 sessions each) and N456EM's (6: shown whole); a serial with a position's sessions links its list.
+[ "$(find "$paged/tails" -name '*.csv' | wc -l)" -eq 2 ] || fail "expected 2 session lists: $(find "$paged/tails" -name '*.csv' | tr '\n' ' ')"
+grep -q 'Long history: 8 sessions' "$paged/tails/tail-N123EM.html" || fail "tail-N123EM.html does not say it summarises"
+grep -q 'Long history' "$paged/tails/tail-N456EM.html" && fail "tail-N456EM.html (6 sessions) is summarised"
+python3 "$checks" files "$paged" || fail "the summarised site's files"
+for page in tails/tail-N123EM.html; do
+  name="paged-$(basename "$page" .html)"
+  browser "$paged/$page" "$name" dom || fail "chromium exited with $? on --dump-dom of the summarised $page"
+  msgs="$(console_lines "$name")"
+  [ -z "$msgs" ] || { fail "the console shows messages for the summarised $page:"; echo "$msgs"; }
+  python3 "$checks" dom "$paged" "$page" "$out/$name.dom.html" || fail "the links of the summarised $page in the browser's DOM"
+  grep -q 'class="full-history" href="tail-N123EM.position-1.csv"' "$out/$name.dom.html" || fail "the browser's DOM of $page has no link to its list"
+done
+browser "$paged/tails/tail-N123EM.html" site-tail-paged screenshot || fail "chromium exited with $? on the screenshot of a summarised tail page"
+[ -s "$out/site-tail-paged.png" ] || fail "no screenshot site-tail-paged.png"
+python3 "$here/report_checks.py" png "$out/site-tail-paged.png" || fail "the summarised tail page's screenshot does not show the plots"
+
 echo "== writing safely"
 before="$(stat -c %i "$site/index.html")"
 "$emadiag" site --db "$db" --out "$site" 2>"$out/site-again.txt" || fail "a second run over the same site was refused: $(cat "$out/site-again.txt")"
@@ -103,6 +128,7 @@ ls "$out" | grep -q '\.new-' && fail "a staging folder was left beside the site"
 if [ -n "$shots" ]; then
   cp "$out/site-index.png" "$shots/site-index.png"
   cp "$out/site-tail.png" "$shots/site-tail.png"
+  cp "$out/site-tail-paged.png" "$shots/site-tail-paged.png"
 fi
 if [ "$failures" -ne 0 ]; then
   echo "site_check: $failures failure(s); files in $out"

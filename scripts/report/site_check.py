@@ -4,6 +4,9 @@
   site_check.py files SITE_DIR            every page: well-formed, no script, no URL scheme, the CSP
                                           of default-src 'none'; every link relative, inside the site,
                                           to a file that exists and, with a #fragment, to an id it holds
+                                          every other file (the CSV lists of summarised sections)
+                                          linked from a page; each summarised section's list holds
+                                          as many sessions as its page says it has
   site_check.py dom SITE_DIR PAGE DOM     the links of PAGE as the browser built its DOM (--dump-dom
                                           output DOM) resolve the same way
 
@@ -17,6 +20,8 @@ import xml.etree.ElementTree as ET
 
 HREF = re.compile(r'(?:href|src|xlink:href)\s*=\s*"([^"]*)"')
 ID = re.compile(r'\sid="([^"]*)"')
+# A summarised section's note: its session count and the link to the list of every session.
+SUMMARY = re.compile(r'Long history: (\d+) sessions\.[^<]*<a class="full-history" href="([^"]*)"')
 FORBIDDEN = ("<script", "javascript:", "<iframe", "<object", "<embed", "<img", "<link", "@import")
 
 
@@ -82,7 +87,42 @@ def check_files(site):
                 problems.append(f"index.html does not link {rel}")
             if 'href="../index.html"' not in open(page, encoding="utf-8").read():
                 problems.append(f"{rel} does not link back to the index")
+    problems += check_lists(site, pages)
     print(f"files: {len(pages)} pages, {links} links checked, {sum(os.path.getsize(p) for p in pages)} bytes")
+    return problems
+
+
+def check_lists(site, pages):
+    """Every file that is not a page is linked from a page; each summarised section's list has a header
+    and one line per session the page counts."""
+    problems = []
+    linked = set()
+    summaries = 0
+    for page in pages:
+        text = open(page, encoding="utf-8").read()
+        for href in HREF.findall(text):
+            path = urllib.parse.urlsplit(href.replace("&amp;", "&")).path
+            if path:
+                linked.add(os.path.normpath(os.path.join(os.path.dirname(page), urllib.parse.unquote(path))))
+        for sessions, href in SUMMARY.findall(text):
+            summaries += 1
+            target = os.path.normpath(os.path.join(os.path.dirname(page), urllib.parse.unquote(href)))
+            if not os.path.isfile(target):
+                continue  # check_links names it
+            with open(target, encoding="utf-8") as f:
+                lines = f.read().splitlines()
+            if not lines or not lines[0].startswith("session,started_utc,"):
+                problems.append(f"{target}: no header row")
+            elif len(lines) - 1 != int(sessions):
+                problems.append(f"{page}: says {sessions} sessions, {href} lists {len(lines) - 1}")
+    for d, _, files in os.walk(site):
+        for f in files:
+            path = os.path.normpath(os.path.join(d, f))
+            if f.endswith(".html") or f == ".emadiag-site":
+                continue
+            if path not in linked:
+                problems.append(f"{os.path.relpath(path, site)} is linked from no page")
+    print(f"lists: {summaries} summarised section(s) with their session lists checked")
     return problems
 
 

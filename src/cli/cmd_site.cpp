@@ -1,16 +1,18 @@
-// emadiag site --db D --out DIR [--draws 4000] [--fleet-draws 1000] [--seed 1] [--threads N]:
+// emadiag site --db D --out DIR [--draws 4000] [--fleet-draws 1000] [--seed 1] [--threads N]
+//              [--full-history-max 400] [--recent-sessions 40]:
 // the fleet as a static, self-contained web site (issue 26, docs/install.md): DIR/index.html ranks
 // every tail and position as `fleet` ranks them and links each to its tail's page, and
 // DIR/tails/tail-<name>.html is the tail's HTML maintenance report (`report --format html`) with a link
-// back to the index. No script, no network reference (each page carries the report's
+// back to the index. A position or serial with a long history is summarised on that page
+// (report/history_summary.hpp) and every one of its sessions is in tails/tail-<name>.<anchor>.csv,
+// which the page links. No script, no network reference (each page carries the report's
 // Content-Security-Policy default-src 'none'), only relative links between the pages.
 // Written safely: the site is built in a fresh folder beside DIR and moved into place whole; an
-// existing DIR is replaced only when it holds nothing but an earlier site (its marker file, index.html
-// and tails/tail-*.html), otherwise refused. Tail numbers become file names by escaping every byte
+// existing DIR is replaced only when it holds nothing but an earlier site (its marker file, index.html,
+// tails/tail-*.html and tails/tail-*.csv), otherwise refused. Tail numbers become file names by escaping every byte
 // other than [A-Za-z0-9-] as _XX (hex), so no name can leave tails/ or collide with another.
 #include "cli/command.hpp"
 #include "cli/db_source.hpp"
-#include "cli/output_file.hpp"
 #include "cli/site_file_name.hpp"
 
 #include "core/emadiag_error.hpp"
@@ -20,12 +22,15 @@
 #include "report/html_report.hpp"
 #include "report/record_adapter.hpp"
 
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <cstdlib>
 #include <filesystem>
 #include <iomanip>
@@ -33,6 +38,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -49,6 +55,8 @@ constexpr const char* kTailFolder = "tails";
 /// Where the tail page's own markup begins: the site's navigation goes right after it.
 constexpr const char* kBodyOpen = "<body>\n";
 constexpr unsigned kMaxThreads = 256;
+/// The most sessions a page may be asked to list before summarising (or as the recent ones).
+constexpr std::size_t kMaxListedSessions = 1000000;
 constexpr const char* kSitePolicy = "default-src 'none'; style-src 'unsafe-inline'";
 
 struct SiteCliOptions {
@@ -56,17 +64,88 @@ struct SiteCliOptions {
     std::string out;
     pg::FleetRecordOptions record;
     pg::FleetOptions fleet;
-    unsigned threads = 0;  ///< 0: one per core
+    report::HistoryLimits history;  ///< when a tail page summarises a section (report/history_summary.hpp)
+    unsigned threads = 0;           ///< 0: one per core
 };
+
+/// One new file of the site in its fresh staging folder: written plainly (no temporary, no fsync of
+/// its own; the staging folder is fresh and nothing else writes there). sync_site flushes them all
+/// at once before the site is moved into place.
+void write_site_file(const fs::path& path, const std::string& text) {
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    if (fd < 0) throw EmadiagError("site: cannot create " + path.string() + ": " + std::strerror(errno));
+    std::size_t done = 0;
+    while (done < text.size()) {
+        const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) {
+            const int e = errno;
+            ::close(fd);
+            throw EmadiagError("site: cannot write " + path.string() + " (" + std::to_string(done) + " of " + std::to_string(text.size()) +
+                               " bytes): " + std::strerror(e));
+        }
+        done += static_cast<std::size_t>(n);
+    }
+    if (::close(fd) != 0) throw EmadiagError("site: cannot write " + path.string() + " (close): " + std::strerror(errno));
+}
+
+/// Every file of the staging folder on disk (one syncfs for the thousands of pages, instead of an
+/// fsync each) before the folder is renamed into place.
+void sync_site(const fs::path& dir) {
+    const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd < 0) throw EmadiagError("site: cannot open " + dir.string() + " to flush it: " + std::strerror(errno));
+    const int rc = ::syncfs(fd);
+    const int e = errno;
+    ::close(fd);
+    if (rc != 0) throw EmadiagError("site: cannot flush " + dir.string() + " to disk (syncfs): " + std::strerror(e));
+}
 
 /// What the index needs of each tail's page: its file and the anchor of each position's section.
 struct TailPage {
     std::string file;
     std::map<std::string, std::string> position_anchor;
     std::size_t bytes = 0;
+    std::size_t lists = 0, list_bytes = 0;  ///< the CSV lists of its summarised sections
 };
 
+/// The file of the list of every session of a summarised section, beside the tail's page:
+/// tail-<name>.<anchor>.csv (the escaped name holds no '.', so no tail's files collide with another's).
+std::string list_file_name(const std::string& page_file, const std::string& anchor) {
+    return page_file.substr(0, page_file.size() - std::string(kSitePageExtension).size()) + "." + anchor + kSiteListExtension;
+}
+
+/// Writes the CSV list of each summarised section of `d` beside its page (a serial section holding
+/// the same sessions as a position's links that position's list) and returns the links for the page.
+report::HtmlOptions write_lists(const report::ReportDocument& d, const report::HistoryLimits& history, const fs::path& folder, TailPage& page) {
+    report::HtmlOptions opt;
+    opt.history = history;
+    std::vector<std::pair<std::vector<std::string>, std::string>> written;  // session ids, file
+    const auto one = [&](const report::ReportSection& s, std::size_t i) {
+        if (!report::summarised(s, opt.history)) return;
+        const std::string anchor = report::section_anchor(s, i);
+        std::vector<std::string> ids;
+        ids.reserve(s.sessions.size());
+        for (const auto& x : s.sessions) ids.push_back(x.id);
+        for (const auto& [same, file] : written)
+            if (same == ids) {
+                opt.full_history_href[anchor] = file;
+                return;
+            }
+        const std::string file = list_file_name(page.file, anchor);
+        const std::string csv = report::sessions_csv(s);
+        write_site_file(folder / file, csv);
+        ++page.lists;
+        page.list_bytes += csv.size();
+        opt.full_history_href[anchor] = file;
+        written.emplace_back(std::move(ids), file);
+    };
+    for (std::size_t i = 0; i < d.positions.size(); ++i) one(d.positions[i], i);
+    for (std::size_t i = 0; i < d.serials.size(); ++i) one(d.serials[i], i);
+    return opt;
+}
+
 std::string esc(const std::string& s) { return report::html_escape(s); }
+
 
 std::string days(const std::optional<double>& v) {
     if (!v) return "beyond horizon";
@@ -137,7 +216,9 @@ std::string index_html(const std::vector<pg::FleetRow>& rows, const std::vector<
     os << "</ul>\n</section>\n<footer>\n<p class=\"note\">Ranked as <b>emadiag fleet</b> ranks: the lower bound of the 90 % RUL interval in days "
           "(cycles converted at each position's own rate), then the last verdict; "
        << o.fleet.rul.draws << " Monte Carlo draws, seed " << o.fleet.rul.seed << ". Each tail's page is its maintenance report (emadiag report "
-       << "--format html, " << o.record.rul.draws << " draws, seed " << o.record.rul.seed << ").</p>\n</footer>\n</body>\n</html>\n";
+       << "--format html, " << o.record.rul.draws << " draws, seed " << o.record.rul.seed << "); a position or serial with more than "
+       << o.history.full_max << " sessions is summarised there, and its page links the CSV list of all its sessions.</p>\n"
+       << "</footer>\n</body>\n</html>\n";
     return os.str();
 }
 
@@ -169,7 +250,8 @@ void check_replaceable(const fs::path& dir) {
         if (name == kTailFolder && e.is_directory() && !e.is_symlink()) {
             for (const auto& t : fs::directory_iterator(e.path())) {
                 const std::string f = t.path().filename().string();
-                if (!t.is_regular_file() || t.is_symlink() || f.rfind(kSiteTailFilePrefix, 0) != 0 || t.path().extension() != kSitePageExtension)
+                if (!t.is_regular_file() || t.is_symlink() || f.rfind(kSiteTailFilePrefix, 0) != 0 ||
+                    (t.path().extension() != kSitePageExtension && t.path().extension() != kSiteListExtension))
                     throw EmadiagError("site: " + dir.string() + " holds " + t.path().string() +
                                        ", which this command did not write; give a new or empty folder");
             }
@@ -194,7 +276,8 @@ fs::path fresh_sibling(const fs::path& dir, const std::string& what) {
 }
 
 struct Totals {
-    std::size_t files = 0, bytes = 0;
+    std::size_t files = 0, bytes = 0;  ///< pages (the index and the tails') and the bytes of every file
+    std::size_t lists = 0;             ///< the CSV lists of summarised sections
 };
 
 Totals write_site(const SiteCliOptions& o, const fs::path& root) {
@@ -208,21 +291,26 @@ Totals write_site(const SiteCliOptions& o, const fs::path& root) {
     std::mutex mutex;
     std::atomic<std::size_t> next{0};
     std::string first_error;
-    const auto work = [&] {
+    // A connection per thread; the calling thread keeps the one it has (each open checks the file).
+    const auto work = [&](db::RecordSource* given) {
         try {
-            db::OpenedSource own = db::open_record_source(o.db);  // a connection per thread
+            std::optional<db::OpenedSource> opened;
+            if (given == nullptr) opened.emplace(db::open_record_source(o.db));
+            db::RecordSource& source = given != nullptr ? *given : *opened->source;
             for (std::size_t i = next++; i < tails.size(); i = next++) {
                 {
                     const std::lock_guard<std::mutex> lock(mutex);
                     if (!first_error.empty()) return;
                 }
                 const std::string& tail = tails[i];
-                const pg::FleetRecord record = pg::build_fleet_record(*own.source, tail, o.record);
+                const pg::FleetRecord record = pg::build_fleet_record(source, tail, o.record);
                 TailPage page;
                 page.file = site_tail_file_name(tail);
                 for (std::size_t k = 0; k < record.positions.size(); ++k) page.position_anchor[record.positions[k].key] = "position-" + std::to_string(k + 1);
-                const std::string html = with_navigation(report::render_html(report::from_fleet_record(record, {generated, EMADIAG_VERSION, o.db})), tail);
-                write_output((root / kTailFolder / page.file).string(), html);
+                const report::ReportDocument document = report::from_fleet_record(record, {generated, EMADIAG_VERSION, o.db});
+                const report::HtmlOptions options = write_lists(document, o.history, root / kTailFolder, page);
+                const std::string html = with_navigation(report::render_html(document, options), tail);
+                write_site_file(root / kTailFolder / page.file, html);
                 page.bytes = html.size();
                 const std::lock_guard<std::mutex> lock(mutex);
                 pages.emplace(tail, std::move(page));
@@ -235,19 +323,20 @@ Totals write_site(const SiteCliOptions& o, const fs::path& root) {
     std::vector<std::thread> pool;
     const unsigned wanted = o.threads != 0 ? o.threads : std::max(1u, std::thread::hardware_concurrency());
     const unsigned n = std::max(1u, std::min<unsigned>(wanted, static_cast<unsigned>(std::max<std::size_t>(1, tails.size()))));
-    for (unsigned t = 1; t < n; ++t) pool.emplace_back(work);
-    work();
+    for (unsigned t = 1; t < n; ++t) pool.emplace_back(work, nullptr);
+    work(database.source.get());
     for (auto& t : pool) t.join();
     if (!first_error.empty()) throw EmadiagError("site: " + first_error);
 
     Totals totals;
     for (const auto& [tail, page] : pages) {
         ++totals.files;
-        totals.bytes += page.bytes;
+        totals.bytes += page.bytes + page.list_bytes;
+        totals.lists += page.lists;
     }
     const std::string index = index_html(rows, tails, pages, generated, o);
-    write_output((root / kIndexFile).string(), index);
-    write_output((root / kSiteMarker).string(), std::string("emadiag site ") + EMADIAG_VERSION + "\n");
+    write_site_file(root / kIndexFile, index);
+    write_site_file(root / kSiteMarker, std::string("emadiag site ") + EMADIAG_VERSION + "\n");
     totals.files += 1;
     totals.bytes += index.size();
     return totals;
@@ -266,6 +355,14 @@ const bool registered = register_command(Command{
         sub.add_option("--draws", o->record.rul.draws, "Monte Carlo draws for each tail page's RUL intervals")->capture_default_str();
         sub.add_option("--fleet-draws", o->fleet.rul.draws, "Monte Carlo draws for the index's ranking")->capture_default_str();
         sub.add_option("--seed", o->record.rul.seed, "Seed of the Monte Carlo draws (index and pages)")->capture_default_str();
+        sub.add_option("--full-history-max", o->history.full_max,
+                       "A position or serial with more sessions is summarised on its tail page (the recent sessions, every one not "
+                       "SERVICEABLE, decimated plots) and its page links the CSV list of all its sessions")
+            ->capture_default_str()
+            ->check(CLI::Range(std::size_t{1}, kMaxListedSessions));
+        sub.add_option("--recent-sessions", o->history.recent, "Most recent sessions a summarised section lists and plots as measured")
+            ->capture_default_str()
+            ->check(CLI::Range(std::size_t{1}, kMaxListedSessions));
         sub.add_option("--threads", o->threads, "Tail pages written in parallel, each with its own database connection (0: one per core)")
             ->capture_default_str()
             ->check(CLI::Range(0u, kMaxThreads));
@@ -278,6 +375,7 @@ const bool registered = register_command(Command{
             Totals totals;
             try {
                 totals = write_site(*o, staging);
+                sync_site(staging);
                 std::error_code ec;
                 if (fs::exists(fs::symlink_status(out, ec))) {
                     check_replaceable(out);  // again: nothing foreign appeared meanwhile
@@ -294,7 +392,7 @@ const bool registered = register_command(Command{
                 throw;
             }
             const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-            std::cerr << "site: wrote " << out.string() << "/ (index.html and " << totals.files - 1 << " tail pages, " << totals.bytes
+            std::cerr << "site: wrote " << out.string() << "/ (index.html and " << totals.files - 1 << " tail pages, " << totals.lists << " session lists, " << totals.bytes
                       << " bytes) in " << std::fixed << std::setprecision(1) << s << " s\n";
             return 0;
         };

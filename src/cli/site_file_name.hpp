@@ -10,6 +10,8 @@ namespace emadiag::cli {
 
 inline constexpr const char* kSiteTailFilePrefix = "tail-";
 inline constexpr const char* kSitePageExtension = ".html";
+/// The CSV list of every session of a summarised section, beside its tail's page (cmd_site.cpp).
+inline constexpr const char* kSiteListExtension = ".csv";
 
 [[nodiscard]] inline std::string site_tail_file_name(const std::string& tail) {
     static constexpr const char* kHex = "0123456789ABCDEF";

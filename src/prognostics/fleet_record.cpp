@@ -179,6 +179,82 @@ json view_json(const HistoryView& v) {
     return j;
 }
 
+/// The view of one serial seen on the tail: its whole history on every tail (from the positions'
+/// sessions when it never left this tail), and its trends (a position's when they are the same sessions).
+HistoryView serial_view(db::RecordSource& database, const FleetRecord& r, const std::string& serial, const std::string& tail_number,
+                        const db::SessionListParts& rows_and_findings, const FleetRecordOptions& options) {
+    HistoryView v;
+    v.kind = "serial";
+    v.key = serial;
+    std::vector<db::StoredTestSession> sessions;
+    std::set<std::int64_t> amended_here;
+    v.installations = database.installations_of_serial(serial);
+    const bool only_here = !database.serial_seen_elsewhere(serial, tail_number);
+    if (only_here) {
+        // From the positions' sessions: sorted as pointers; when they are one position's whole
+        // history, in its order, that list is shared; otherwise each kept session is copied once.
+        std::vector<const db::StoredTestSession*> of_serial;
+        for (const auto& pv : r.positions)
+            for (const auto& s : pv.sessions)
+                if (s.actuator_serial == serial) of_serial.push_back(&s);
+        std::sort(of_serial.begin(), of_serial.end(), [](const auto* a, const auto* b) {
+            return std::tie(a->started_utc, a->session_id) < std::tie(b->started_utc, b->session_id);
+        });
+        for (const auto* s : of_serial)
+            if (s->amends_session_id) amended_here.insert(*s->amends_session_id);
+        std::erase_if(of_serial, [&amended_here](const db::StoredTestSession* s) { return amended_here.count(s->session_id) > 0; });
+        for (const auto& pv : r.positions) {
+            if (pv.sessions.size() != of_serial.size()) continue;
+            bool whole = true;
+            for (std::size_t i = 0; i < of_serial.size() && whole; ++i) whole = of_serial[i] == &pv.sessions[i];
+            if (whole) {
+                v.sessions = pv.sessions;
+                break;
+            }
+        }
+        if (v.sessions.empty()) {
+            sessions.reserve(of_serial.size());
+            for (const auto* s : of_serial) sessions.push_back(*s);
+        }
+    } else {
+        std::vector<db::StoredTestSession> of_serial = database.sessions_of_serial(serial, rows_and_findings);
+        for (const auto& s : of_serial)
+            if (s.amends_session_id) amended_here.insert(*s.amends_session_id);
+        sessions.reserve(of_serial.size());
+        for (auto& s : of_serial)
+            if (!amended_here.count(s.session_id)) sessions.push_back(std::move(s));
+    }
+    if (v.sessions.empty()) v.sessions = SharedList<db::StoredTestSession>(std::move(sessions));
+    const auto& history = v.sessions;
+    v.current_place = history.back().tail_number + " " + history.back().position.value_or(kNoPosition);
+    v.last_verdict = history.back().verdict;
+    std::set<std::string> places;
+    for (const auto& s : history) places.insert(s.tail_number + " " + s.position.value_or(kNoPosition));
+    if (places.size() > 1) {
+        std::string list;
+        for (const auto& p : places) list += (list.empty() ? "" : ", ") + p;
+        v.notes.push_back("installed at " + std::to_string(places.size()) + " places: " + list);
+    }
+    // A serial that never left one position has that position's trends: computed once.
+    const HistoryView* same = nullptr;
+    std::vector<std::int64_t> ids;
+    for (const auto& s : history)
+        if (options.phase == kPhaseAll || s.phase == options.phase) ids.push_back(s.session_id);
+    for (const auto& pv : r.positions)
+        if (pv.trend_session_ids == ids) same = &pv;
+    if (same != nullptr) {
+        v.trend_session_ids = ids;
+        v.trend_first_days = same->trend_first_days;
+        v.trend_last_days = same->trend_last_days;
+        v.parameters = same->parameters;
+    } else {
+        std::vector<const db::StoredTestSession*> ptrs;
+        for (const auto& s : history) ptrs.push_back(&s);
+        fill_trends(v, ptrs, options);
+    }
+    return v;
+}
+
 }  // namespace
 
 const AxisTrend* ParameterHistory::preferred() const {
@@ -282,78 +358,7 @@ FleetRecord build_fleet_record(db::RecordSource& database, const std::string& ta
         r.positions.push_back(std::move(v));
     }
     // Per serial seen on this tail: its whole history on every tail.
-    for (const auto& serial : serials) {
-        HistoryView v;
-        v.kind = "serial";
-        v.key = serial;
-        std::vector<db::StoredTestSession> sessions;
-        std::set<std::int64_t> amended_here;
-        v.installations = database.installations_of_serial(serial);
-        const bool only_here = !database.serial_seen_elsewhere(serial, tail_number);
-        if (only_here) {
-            // From the positions' sessions: sorted as pointers; when they are one position's whole
-            // history, in its order, that list is shared; otherwise each kept session is copied once.
-            std::vector<const db::StoredTestSession*> of_serial;
-            for (const auto& pv : r.positions)
-                for (const auto& s : pv.sessions)
-                    if (s.actuator_serial == serial) of_serial.push_back(&s);
-            std::sort(of_serial.begin(), of_serial.end(), [](const auto* a, const auto* b) {
-                return std::tie(a->started_utc, a->session_id) < std::tie(b->started_utc, b->session_id);
-            });
-            for (const auto* s : of_serial)
-                if (s->amends_session_id) amended_here.insert(*s->amends_session_id);
-            std::erase_if(of_serial, [&amended_here](const db::StoredTestSession* s) { return amended_here.count(s->session_id) > 0; });
-            for (const auto& pv : r.positions) {
-                if (pv.sessions.size() != of_serial.size()) continue;
-                bool whole = true;
-                for (std::size_t i = 0; i < of_serial.size() && whole; ++i) whole = of_serial[i] == &pv.sessions[i];
-                if (whole) {
-                    v.sessions = pv.sessions;
-                    break;
-                }
-            }
-            if (v.sessions.empty()) {
-                sessions.reserve(of_serial.size());
-                for (const auto* s : of_serial) sessions.push_back(*s);
-            }
-        } else {
-            std::vector<db::StoredTestSession> of_serial = database.sessions_of_serial(serial, rows_and_findings);
-            for (const auto& s : of_serial)
-                if (s.amends_session_id) amended_here.insert(*s.amends_session_id);
-            sessions.reserve(of_serial.size());
-            for (auto& s : of_serial)
-                if (!amended_here.count(s.session_id)) sessions.push_back(std::move(s));
-        }
-        if (v.sessions.empty()) v.sessions = SharedList<db::StoredTestSession>(std::move(sessions));
-        const auto& history = v.sessions;
-        v.current_place = history.back().tail_number + " " + history.back().position.value_or(kNoPosition);
-        v.last_verdict = history.back().verdict;
-        std::set<std::string> places;
-        for (const auto& s : history) places.insert(s.tail_number + " " + s.position.value_or(kNoPosition));
-        if (places.size() > 1) {
-            std::string list;
-            for (const auto& p : places) list += (list.empty() ? "" : ", ") + p;
-            v.notes.push_back("installed at " + std::to_string(places.size()) + " places: " + list);
-        }
-        // A serial that never left one position has that position's trends: computed once.
-        const HistoryView* same = nullptr;
-        std::vector<std::int64_t> ids;
-        for (const auto& s : history)
-            if (options.phase == kPhaseAll || s.phase == options.phase) ids.push_back(s.session_id);
-        for (const auto& pv : r.positions)
-            if (pv.trend_session_ids == ids) same = &pv;
-        if (same != nullptr) {
-            v.trend_session_ids = ids;
-            v.trend_first_days = same->trend_first_days;
-            v.trend_last_days = same->trend_last_days;
-            v.parameters = same->parameters;
-        } else {
-            std::vector<const db::StoredTestSession*> ptrs;
-            for (const auto& s : history) ptrs.push_back(&s);
-            fill_trends(v, ptrs, options);
-        }
-        r.serials.push_back(std::move(v));
-    }
+    for (const auto& serial : serials) r.serials.push_back(serial_view(database, r, serial, tail_number, rows_and_findings, options));
     return r;
 }
 

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <iomanip>
 #include <limits>
+#include <set>
 #include <sstream>
 
 namespace emadiag::report {
@@ -101,9 +102,11 @@ void check_parameter(const ReportParameter& p, const std::string& where) {
     check_number(p.nominal, at + " nominal");
     if (p.limit) check_number(p.limit->value, at + " limit");
     for (std::size_t i = 0; i < p.points.size(); ++i) {
-        check_number(p.points[i].x, at + " points[" + std::to_string(i) + "].x");
-        check_number(p.points[i].value, at + " points[" + std::to_string(i) + "].value");
-        check_number(p.points[i].std_error, at + " points[" + std::to_string(i) + "].std_error");
+        const ReportPoint& q = p.points[i];
+        if (std::isfinite(q.x) && std::isfinite(q.value) && std::isfinite(q.std_error)) continue;  // the names only for a bad one
+        check_number(q.x, at + " points[" + std::to_string(i) + "].x");
+        check_number(q.value, at + " points[" + std::to_string(i) + "].value");
+        check_number(q.std_error, at + " points[" + std::to_string(i) + "].std_error");
     }
     if (p.crossing_x) check_number(*p.crossing_x, at + " crossing_x");
     if (p.fit) {
@@ -113,6 +116,9 @@ void check_parameter(const ReportParameter& p, const std::string& where) {
                                std::to_string(c.lower.size()) + " lower and " + std::to_string(c.upper.size()) + " upper values");
         }
         for (std::size_t i = 0; i < c.x.size(); ++i) {
+            if (std::isfinite(c.x[i]) && std::isfinite(c.mean[i]) && std::isfinite(c.lower[i]) && std::isfinite(c.upper[i]) &&
+                c.lower[i] <= c.mean[i] && c.mean[i] <= c.upper[i])
+                continue;  // the names only for a bad one
             const std::string fi = at + " fit[" + std::to_string(i) + "]";
             check_number(c.x[i], fi + ".x");
             check_number(c.mean[i], fi + ".mean");
@@ -173,8 +179,54 @@ std::optional<std::pair<double, double>> section_x_range(const ReportSection& s)
     return std::make_pair(lo - pad, hi + pad);
 }
 
-void write_section(std::ostringstream& o, const ReportSection& s, std::size_t index, TimeAxis axis) {
-    const std::string anchor = (s.kind == "serial" ? "serial-" : "position-") + std::to_string(index + 1);
+/// What a summarised section shows and where the rest is (history_summary.hpp).
+void write_summary_note(std::ostringstream& o, const ReportSection& s, std::size_t listed, const std::string& tail, const std::string& anchor,
+                        const HtmlOptions& opt) {
+    o << "<p class=\"note history-summary\">Long history: " << s.sessions.size() << " sessions. Listed below: the " << opt.history.recent
+      << " most recent, every session whose verdict is not " << kServiceableVerdict << " and the one after it (" << listed
+      << " in all). Plots: those sessions and both points of every crossing of the limit as measured; every earlier point lies in the shaded envelope of "
+         "the 95 % bars (" << opt.history.columns << " time columns), the dashed line is the mean of each column. Every session: ";
+    const auto href = opt.full_history_href.find(anchor);
+    if (href != opt.full_history_href.end())
+        o << "<a class=\"full-history\" href=\"" << h(href->second) << "\">" << h(href->second) << "</a>";
+    else
+        o << "<code>emadiag export --tail " << h(tail) << " --format csv</code> (sessions.csv)";
+    o << ".</p>\n";
+}
+
+void write_sessions(std::ostringstream& o, const ReportSection& s, const std::vector<std::size_t>& listed) {
+    o << "<h3>Session history (" << s.sessions.size();
+    if (listed.size() != s.sessions.size()) o << ", " << listed.size() << " listed";
+    o << ")</h3>\n";
+    if (s.sessions.empty()) {
+        o << "<p class=\"note\">no sessions</p>\n";
+        return;
+    }
+    o << "<table class=\"sessions\">\n"
+      << header_row({"session", "started (UTC)", "tail", "position", "serial", "phase", "kind", "operator", "cycles", "hours", "verdict",
+                     "note", "emadiag"});
+    for (const std::size_t i : listed) {
+        const ReportSession& x = s.sessions[i];
+        o << table_row({h(x.id), h(x.started_utc), h(x.tail_number), h(x.position), h(x.serial), h(x.phase), h(x.kind), h(x.operator_id),
+                        x.cycles ? h(whole(*x.cycles)) : "-", x.hours ? h(num(*x.hours, 6)) : "-", h(x.verdict), h(x.note), h(x.tool_version)},
+                       {false, false, false, false, false, false, false, false, true, true});
+    }
+    o << "</table>\n";
+}
+
+void write_section(std::ostringstream& o, const ReportSection& s, std::size_t index, TimeAxis axis, const std::string& tail, const HtmlOptions& opt) {
+    const std::string anchor = section_anchor(s, index);
+    const bool summary = summarised(s, opt.history);
+    std::vector<std::size_t> listed;
+    if (summary) {
+        listed = listed_sessions(s, opt.history);
+    } else {
+        listed.resize(s.sessions.size());
+        for (std::size_t i = 0; i < listed.size(); ++i) listed[i] = i;
+    }
+    std::set<std::string> listed_ids;
+    if (summary)
+        for (const std::size_t i : listed) listed_ids.insert(s.sessions[i].id);
     o << "<section class=\"" << h(s.kind) << "\" id=\"" << anchor << "\">\n";
     o << "<h2>" << h(s.kind == "serial" ? "Serial " : "Position ") << h(s.name) << " " << status_badge(s.health.status) << "</h2>\n";
     o << "<p>";
@@ -184,6 +236,7 @@ void write_section(std::ostringstream& o, const ReportSection& s, std::size_t in
       << (s.health.index_parameter.empty() ? "" : ", from " + h(s.health.index_parameter)) << ") &#183; status "
       << status_badge(s.health.status) << " " << h(s.health.reason) << "</p>\n";
     for (const auto& n : s.notes) o << "<p class=\"note\">" << h(n) << "</p>\n";
+    if (summary) write_summary_note(o, s, listed.size(), tail, anchor, opt);
 
     o << "<h3>Parameters</h3>\n<table class=\"parameters\">\n"
       << header_row({"parameter", "latest [95 %]", "nominal", "limit", "health index (95 % lower)", "trend", "model", "crossing",
@@ -215,8 +268,19 @@ void write_section(std::ostringstream& o, const ReportSection& s, std::size_t in
     for (std::size_t i = 0; i < s.parameters.size(); ++i) {
         const auto& p = s.parameters[i];
         const std::string id = (s.kind == "serial" ? "s" : "p") + std::to_string(index + 1) + "-" + std::to_string(i + 1);
-        o << "<figure>\n" << trend_plot(p, axis, id, x_range).render();
-        o << "<figcaption>";
+        std::string caption;
+        if (summary) {
+            const PlotSummary ps = summarise_plot(p, listed_ids, opt.history);
+            SvgPlot plot = trend_plot(ps.shown, axis, id, x_range);
+            if (ps.envelope) plot.add_band(*ps.envelope);
+            if (ps.means) plot.add_line(*ps.means);
+            o << "<figure>\n" << plot.render();
+            caption = std::to_string(ps.shown.points.size()) + " of " + std::to_string(p.points.size()) + " points drawn as measured, " +
+                      std::to_string(ps.enveloped) + " in the envelope only. ";
+        } else {
+            o << "<figure>\n" << trend_plot(p, axis, id, x_range).render();
+        }
+        o << "<figcaption>" << h(caption);
         for (const auto& r : p.rul) o << "RUL (" << h(r.unit) << "): " << h(r.summary) << ". ";
         if (p.fit && !p.model_note.empty()) o << "Model: " << h(p.model_note) << ". ";
         for (const auto& n : p.notes) o << h(n) << ". ";
@@ -232,19 +296,7 @@ void write_section(std::ostringstream& o, const ReportSection& s, std::size_t in
         o << "</table>\n";
     }
 
-    o << "<h3>Session history (" << s.sessions.size() << ")</h3>\n";
-    if (s.sessions.empty()) {
-        o << "<p class=\"note\">no sessions</p>\n";
-    } else {
-        o << "<table class=\"sessions\">\n"
-          << header_row({"session", "started (UTC)", "tail", "position", "serial", "phase", "kind", "operator", "cycles", "hours", "verdict",
-                         "note", "emadiag"});
-        for (const auto& x : s.sessions)
-            o << table_row({h(x.id), h(x.started_utc), h(x.tail_number), h(x.position), h(x.serial), h(x.phase), h(x.kind), h(x.operator_id),
-                            x.cycles ? h(whole(*x.cycles)) : "-", x.hours ? h(num(*x.hours, 6)) : "-", h(x.verdict), h(x.note), h(x.tool_version)},
-                           {false, false, false, false, false, false, false, false, true, true});
-        o << "</table>\n";
-    }
+    write_sessions(o, s, listed);
 
     o << "<h3>Open discovery findings (" << s.findings.size() << ")</h3>\n";
     if (s.findings.empty()) {
@@ -259,6 +311,10 @@ void write_section(std::ostringstream& o, const ReportSection& s, std::size_t in
 }
 
 }  // namespace
+
+std::string section_anchor(const ReportSection& section, std::size_t index) {
+    return (section.kind == "serial" ? "serial-" : "position-") + std::to_string(index + 1);
+}
 
 std::string html_escape(const std::string& text) { return xml_escape(text); }
 
@@ -306,7 +362,7 @@ SvgPlot trend_plot(const ReportParameter& p, TimeAxis axis, const std::string& i
     return plot;
 }
 
-std::string render_html(const ReportDocument& d) {
+std::string render_html(const ReportDocument& d, const HtmlOptions& options) {
     for (const auto* list : {&d.positions, &d.serials})
         for (const auto& s : *list)
             for (const auto& p : s.parameters) check_parameter(p, s.kind + " \"" + s.name + "\"");
@@ -338,8 +394,8 @@ std::string render_html(const ReportDocument& d) {
       << num(kMonitorIndex) << " or RUL 90 % lower bound below " << whole(kMonitorWindowDays) << " days), PLAN (below " << num(kPlanIndex)
       << " or " << whole(kPlanWindowDays) << " days), REPLACE (at or past the limit).</p>\n</section>\n";
 
-    for (std::size_t i = 0; i < d.positions.size(); ++i) write_section(o, d.positions[i], i, d.time_axis);
-    for (std::size_t i = 0; i < d.serials.size(); ++i) write_section(o, d.serials[i], i, d.time_axis);
+    for (std::size_t i = 0; i < d.positions.size(); ++i) write_section(o, d.positions[i], i, d.time_axis, d.tail_number, options);
+    for (std::size_t i = 0; i < d.serials.size(); ++i) write_section(o, d.serials[i], i, d.time_axis, d.tail_number, options);
 
     o << "<footer>\n<h3>Method</h3>\n<p>" << h(d.method_note) << "</p>\n<p>Plots: points are the sessions' measurements with 95 % bars "
       << "(&#177; " << num(kZ95, 3) << " se); the line is the chosen degradation fit and the shaded area its band; the dashed red line "

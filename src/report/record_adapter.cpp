@@ -145,21 +145,30 @@ std::vector<ReportInstallation> installations_of(const pg::HistoryView& v, const
     return out;
 }
 
-ReportSection section_of(const pg::HistoryView& v, const pg::FleetRecord& r, TimeAxis axis) {
+/// The section of `v`; `same`, when given, is the section of a view holding the same list of sessions
+/// and the same trends (a serial that never left its position): its sessions, parameters and health
+/// are copied instead of made again from the same data.
+ReportSection section_of(const pg::HistoryView& v, const pg::FleetRecord& r, TimeAxis axis, const ReportSection* same = nullptr) {
     ReportSection s;
     s.name = v.key;
     s.kind = v.kind;
     if (!v.ata_reference.empty()) s.ata_reference = "ATA " + v.ata_reference + (v.description.empty() ? "" : " " + v.description);
     s.current = v.kind == "position" ? v.current_serial : v.current_place;
     s.installations = installations_of(v, r.installations);
-    for (const auto& x : v.sessions) s.sessions.push_back(session_of(x));
-    std::vector<ParameterHealthInput> inputs;
-    for (const auto& h : v.parameters) {
-        ParameterHealthInput in;
-        s.parameters.push_back(parameter_of(h, axis, in));
-        inputs.push_back(in);
+    if (same != nullptr) {
+        s.sessions = same->sessions;
+        s.parameters = same->parameters;
+        s.health = same->health;
+    } else {
+        for (const auto& x : v.sessions) s.sessions.push_back(session_of(x));
+        std::vector<ParameterHealthInput> inputs;
+        for (const auto& h : v.parameters) {
+            ParameterHealthInput in;
+            s.parameters.push_back(parameter_of(h, axis, in));
+            inputs.push_back(in);
+        }
+        s.health = assess_position(inputs);
     }
-    s.health = assess_position(inputs);
     for (const auto& f : r.open_findings) {
         const bool here = v.kind == "position" ? f.position.value_or("(none)") == v.key : f.actuator_serial == v.key;
         if (!here) continue;
@@ -198,7 +207,12 @@ ReportDocument from_fleet_record(const pg::FleetRecord& r, const TrendAdapterOpt
         d.notes.push_back("Sessions amended by a correction, left out: " + ids + ".");
     }
     for (const auto& v : r.positions) d.positions.push_back(section_of(v, r, d.time_axis));
-    for (const auto& v : r.serials) d.serials.push_back(section_of(v, r, d.time_axis));
+    for (const auto& v : r.serials) {
+        const ReportSection* same = nullptr;
+        for (std::size_t k = 0; k < r.positions.size() && same == nullptr; ++k)
+            if (v.sessions.shares_with(r.positions[k].sessions) && v.parameters.shares_with(r.positions[k].parameters)) same = &d.positions[k];
+        d.serials.push_back(section_of(v, r, d.time_axis, same));
+    }
     return d;
 }
 

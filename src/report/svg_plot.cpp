@@ -3,6 +3,7 @@
 #include "core/emadiag_error.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -25,19 +26,22 @@ constexpr double kLegendSymbolWidth = 22;
 constexpr double kLegendEntryGap = 14;
 constexpr double kPointRadius = 3.2;
 constexpr double kErrorCapHalfWidth = 3;
-/// Dates further than this from 1970 are not dates (about 27 000 years).
-constexpr double kMaxDateDays = 1e7;
-constexpr double kDaysPerMonth = 30.436875;
-constexpr double kDaysPerYear = 365.2425;
-constexpr double kMinutesPerDay = 1440.0;
-/// Spans shorter than this get ticks at times of day ("2026-03-06 12:00").
-constexpr double kMinDateTickSpanDays = 3.0;
+/// Coordinates below this magnitude are formatted with std::to_chars (they fit its buffer).
+constexpr double kToCharsMax = 1e15;
 
 /// A coordinate with two decimals; "-0.00" is written "0.00" so the output does not depend on the sign of zero.
 std::string fmt(double v) {
     char buf[64];
-    std::snprintf(buf, sizeof buf, "%.2f", v);
-    std::string s = buf;
+    std::string s;
+    if (std::abs(v) < kToCharsMax) {
+        // The bytes of printf's "%.2f" (std::to_chars formats as printf does in the C locale), several
+        // times faster: a long history's page holds some 100 000 coordinates.
+        const auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::fixed, 2);
+        s.assign(buf, r.ptr);
+    } else {
+        std::snprintf(buf, sizeof buf, "%.2f", v);  // huge or not finite: as before (truncated to the buffer)
+        s = buf;
+    }
     if (s == "-0.00") s = "0.00";
     return s;
 }
@@ -58,60 +62,6 @@ void check_same_size(std::size_t expected, const std::vector<double>& v, const s
         throw EmadiagError("plot " + kind + " \"" + name + "\": " + field + " has " + std::to_string(v.size()) + " values, x has " +
                            std::to_string(expected));
     }
-}
-
-/// Heckbert, "Nice numbers for graph labels", Graphics Gems (1990): 1, 2, 5 or 10 times a power of 10.
-double nice_number(double x, bool round) {
-    const double exponent = std::floor(std::log10(x));
-    const double fraction = x / std::pow(10.0, exponent);
-    double nice = 10;
-    if (round) {
-        if (fraction < 1.5) nice = 1;
-        else if (fraction < 3) nice = 2;
-        else if (fraction < 7) nice = 5;
-    } else {
-        if (fraction <= 1) nice = 1;
-        else if (fraction <= 2) nice = 2;
-        else if (fraction <= 5) nice = 5;
-    }
-    return nice * std::pow(10.0, exponent);
-}
-
-// Howard Hinnant's civil calendar algorithms (proleptic Gregorian), days since 1970-01-01.
-struct Civil {
-    std::int64_t year;
-    int month, day;
-};
-
-Civil civil_from_days(std::int64_t z) {
-    z += 719468;
-    const std::int64_t era = (z >= 0 ? z : z - 146096) / 146097;
-    const auto doe = static_cast<unsigned>(z - era * 146097);
-    const unsigned yoe = (doe - doe / 1460 + doe / 36524 - doe / 146096) / 365;
-    const std::int64_t y = static_cast<std::int64_t>(yoe) + era * 400;
-    const unsigned doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    const unsigned mp = (5 * doy + 2) / 153;
-    const unsigned d = doy - (153 * mp + 2) / 5 + 1;
-    const unsigned m = mp < 10 ? mp + 3 : mp - 9;
-    return {y + (m <= 2 ? 1 : 0), static_cast<int>(m), static_cast<int>(d)};
-}
-
-std::int64_t days_from_civil(std::int64_t y, int m, int d) {
-    y -= m <= 2 ? 1 : 0;
-    const std::int64_t era = (y >= 0 ? y : y - 399) / 400;
-    const auto yoe = static_cast<unsigned>(y - era * 400);
-    const unsigned doy = (153 * static_cast<unsigned>(m > 2 ? m - 3 : m + 9) + 2) / 5 + static_cast<unsigned>(d) - 1;
-    const unsigned doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
-    return era * 146097 + static_cast<std::int64_t>(doe) - 719468;
-}
-
-std::string date_label(std::int64_t days, int parts) {
-    const Civil c = civil_from_days(days);
-    char buf[48];
-    if (parts == 3) std::snprintf(buf, sizeof buf, "%04lld-%02d-%02d", static_cast<long long>(c.year), c.month, c.day);
-    else if (parts == 2) std::snprintf(buf, sizeof buf, "%04lld-%02d", static_cast<long long>(c.year), c.month);
-    else std::snprintf(buf, sizeof buf, "%04lld", static_cast<long long>(c.year));
-    return buf;
 }
 
 struct Range {
@@ -158,6 +108,98 @@ struct LegendEntry {
     double opacity = 1;
 };
 
+/// Adds everything that is drawn to the x and y data ranges.
+void add_data_ranges(const std::vector<PointSeries>& points, const std::vector<LineSeries>& lines, const std::vector<Band>& bands,
+                     const std::vector<HLine>& hlines, const std::vector<VLine>& vlines, Range& xr, Range& yr) {
+    for (const auto& s : points) {
+        for (std::size_t i = 0; i < s.x.size(); ++i) {
+            xr.add(s.x[i]);
+            const double e = s.y_error.empty() ? 0.0 : s.y_error[i];
+            yr.add(s.y[i] - e);
+            yr.add(s.y[i] + e);
+        }
+    }
+    for (const auto& s : lines) {
+        for (const double v : s.x) xr.add(v);
+        for (const double v : s.y) yr.add(v);
+    }
+    for (const auto& b : bands) {
+        for (const double v : b.x) xr.add(v);
+        for (const double v : b.lower) yr.add(v);
+        for (const double v : b.upper) yr.add(v);
+    }
+    for (const auto& h : hlines) yr.add(h.y);
+    for (const auto& v : vlines) xr.add(v.x);
+}
+
+/// The legend's entries, in drawing order of kinds: every named series and reference line.
+std::vector<LegendEntry> legend_entries(const std::vector<PointSeries>& points, const std::vector<LineSeries>& lines,
+                                        const std::vector<Band>& bands, const std::vector<HLine>& hlines, const std::vector<VLine>& vlines) {
+    std::vector<LegendEntry> legend;
+    for (const auto& s : points)
+        if (!s.name.empty()) legend.push_back({LegendEntry::Point, s.name, s.color});
+    for (const auto& s : lines)
+        if (!s.name.empty()) legend.push_back({LegendEntry::Line, s.name, s.color, s.dashed});
+    for (const auto& b : bands)
+        if (!b.name.empty()) legend.push_back({LegendEntry::Area, b.name, b.color, false, b.opacity});
+    for (const auto& h : hlines)
+        if (!h.name.empty()) legend.push_back({LegendEntry::HRule, h.name, h.color, h.dashed});
+    for (const auto& v : vlines)
+        if (!v.name.empty()) legend.push_back({LegendEntry::VRule, v.name, v.color, v.dashed});
+    return legend;
+}
+
+/// The legend: each entry's symbol and name at its place (x offset, row) across the plot's top.
+void write_legend(std::ostringstream& o, const std::vector<LegendEntry>& legend, const std::vector<std::pair<double, int>>& legend_pos) {
+    o << "<g class=\"legend\">\n";
+    for (std::size_t i = 0; i < legend.size(); ++i) {
+        const auto& e = legend[i];
+        const double x = kMarginLeft + legend_pos[i].first;
+        const double y = kTitleHeight + legend_pos[i].second * kLegendRowHeight + kLegendRowHeight / 2;
+        const std::string c = xml_escape(e.color);
+        switch (e.kind) {
+            case LegendEntry::Point:
+                o << "<circle cx=\"" << fmt(x + 9) << "\" cy=\"" << fmt(y) << "\" r=\"" << fmt(kPointRadius) << "\" fill=\"" << c << "\"/>"
+                  << "<line x1=\"" << fmt(x + 9) << "\" y1=\"" << fmt(y - 6) << "\" x2=\"" << fmt(x + 9) << "\" y2=\"" << fmt(y + 6)
+                  << "\" stroke=\"" << c << "\"/>\n";
+                break;
+            case LegendEntry::Line:
+            case LegendEntry::HRule:
+                o << "<line x1=\"" << fmt(x) << "\" y1=\"" << fmt(y) << "\" x2=\"" << fmt(x + 18) << "\" y2=\"" << fmt(y) << "\" stroke=\"" << c
+                  << "\" stroke-width=\"1.8\"" << (e.dashed ? " stroke-dasharray=\"4 2\"" : "") << "/>\n";
+                break;
+            case LegendEntry::Area:
+                o << "<rect x=\"" << fmt(x) << "\" y=\"" << fmt(y - 5) << "\" width=\"18\" height=\"10\" fill=\"" << c << "\" fill-opacity=\""
+                  << fmt(std::max(e.opacity, 0.3)) << "\"/>\n";
+                break;
+            case LegendEntry::VRule:
+                o << "<line x1=\"" << fmt(x + 9) << "\" y1=\"" << fmt(y - 6) << "\" x2=\"" << fmt(x + 9) << "\" y2=\"" << fmt(y + 6)
+                  << "\" stroke=\"" << c << "\" stroke-width=\"1.2\"" << (e.dashed ? " stroke-dasharray=\"3 3\"" : "") << "/>\n";
+                break;
+        }
+        o << "<text x=\"" << fmt(x + kLegendSymbolWidth) << "\" y=\"" << fmt(y + 4) << "\">" << xml_escape(e.name) << "</text>\n";
+    }
+    o << "</g>\n";
+}
+
+/// One series of points with their error bars.
+template <class Px, class Py>
+void write_points(std::ostringstream& o, const PointSeries& s, const Px& px, const Py& py) {
+    if (s.x.empty()) return;
+    o << "<g class=\"points\" fill=\"" << xml_escape(s.color) << "\" stroke=\"" << xml_escape(s.color) << "\" stroke-width=\"1.2\">\n";
+    for (std::size_t i = 0; i < s.x.size(); ++i) {
+        const double cx = px(s.x[i]);
+        if (!s.y_error.empty() && s.y_error[i] > 0) {
+            const double y1 = py(s.y[i] - s.y_error[i]), y2 = py(s.y[i] + s.y_error[i]);
+            o << "<path class=\"errorbar\" fill=\"none\" d=\"M" << fmt(cx) << ',' << fmt(y1) << " L" << fmt(cx) << ',' << fmt(y2) << " M"
+              << fmt(cx - kErrorCapHalfWidth) << ',' << fmt(y1) << " L" << fmt(cx + kErrorCapHalfWidth) << ',' << fmt(y1) << " M"
+              << fmt(cx - kErrorCapHalfWidth) << ',' << fmt(y2) << " L" << fmt(cx + kErrorCapHalfWidth) << ',' << fmt(y2) << "\"/>\n";
+        }
+        o << "<circle cx=\"" << fmt(cx) << "\" cy=\"" << fmt(py(s.y[i])) << "\" r=\"" << fmt(kPointRadius) << "\"/>\n";
+    }
+    o << "</g>\n";
+}
+
 }  // namespace
 
 std::string xml_escape(const std::string& text) {
@@ -174,126 +216,6 @@ std::string xml_escape(const std::string& text) {
         }
     }
     return out;
-}
-
-std::vector<double> nice_ticks(double lo, double hi, int target) {
-    if (!std::isfinite(lo) || !std::isfinite(hi) || !(lo < hi)) {
-        std::ostringstream os;
-        os << "nice_ticks: range [" << lo << ", " << hi << "] must be finite with lo < hi";
-        throw EmadiagError(os.str());
-    }
-    if (target < 2) throw EmadiagError("nice_ticks: target " + std::to_string(target) + " must be at least 2");
-    const double step = nice_number(nice_number(hi - lo, false) / (target - 1), true);
-    const double first = std::ceil(lo / step - 1e-9);
-    std::vector<double> ticks;
-    for (double k = first;; k += 1) {
-        const double t = k * step;
-        if (t > hi + step * 1e-9) break;
-        ticks.push_back(std::abs(t) < step * 1e-9 ? 0.0 : t);
-    }
-    return ticks;
-}
-
-std::string format_tick(double value, double step) {
-    char buf[64];
-    const double magnitude = std::max(std::abs(value), std::abs(step));
-    const int decimals = std::max(0, static_cast<int>(-std::floor(std::log10(std::abs(step)) + 1e-9)));
-    if (magnitude >= 1e7 || decimals > 6) {
-        std::snprintf(buf, sizeof buf, "%.3g", value);
-    } else {
-        std::snprintf(buf, sizeof buf, "%.*f", decimals, value);
-    }
-    std::string s = buf;
-    if (s.size() > 1 && s[0] == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);  // "-0.0" -> "0.0"
-    return s;
-}
-
-std::vector<DateTick> date_ticks(double lo, double hi, int target) {
-    if (!std::isfinite(lo) || !std::isfinite(hi) || !(lo < hi)) {
-        std::ostringstream os;
-        os << "date_ticks: range [" << lo << ", " << hi << "] must be finite with lo < hi";
-        throw EmadiagError(os.str());
-    }
-    if (std::abs(lo) > kMaxDateDays || std::abs(hi) > kMaxDateDays) {
-        std::ostringstream os;
-        os << "date_ticks: range [" << lo << ", " << hi << "] days since 1970 is not a range of dates (beyond +/-" << kMaxDateDays << " days)";
-        throw EmadiagError(os.str());
-    }
-    if (target < 2) throw EmadiagError("date_ticks: target " + std::to_string(target) + " must be at least 2");
-    const double wanted_step = (hi - lo) / (target - 1);
-    std::vector<DateTick> ticks;
-    if (hi - lo < kMinDateTickSpanDays) {
-        // Less than a few days: times of day, every 1, 2, 5, 10, 15 or 30 minutes or 1, 2, 3, 6, 12 or 24 hours.
-        long long step_min = 1440;
-        for (const long long m : {1LL, 2LL, 5LL, 10LL, 15LL, 30LL, 60LL, 120LL, 180LL, 360LL, 720LL, 1440LL}) {
-            if (static_cast<double>(m) >= wanted_step * kMinutesPerDay) {
-                step_min = m;
-                break;
-            }
-        }
-        const auto first = static_cast<long long>(std::ceil(lo * kMinutesPerDay / static_cast<double>(step_min) - 1e-9));
-        for (long long k = first;; ++k) {
-            const long long minutes = k * step_min;  // since 1970-01-01T00:00
-            const double days = static_cast<double>(minutes) / kMinutesPerDay;
-            if (days > hi + 1e-12) break;
-            const long long per_day = static_cast<long long>(kMinutesPerDay);
-            const std::int64_t day = minutes >= 0 ? minutes / per_day : -((-minutes + per_day - 1) / per_day);
-            const long long minute = minutes - day * per_day;
-            char hm[48];
-            std::snprintf(hm, sizeof hm, " %02lld:%02lld", minute / 60, minute % 60);
-            ticks.push_back({days, date_label(day, 3) + hm});
-        }
-        return ticks;
-    }
-    const auto first_day = static_cast<std::int64_t>(std::ceil(lo));
-    const auto last_day = static_cast<std::int64_t>(std::floor(hi));
-    if (wanted_step < 0.5 * kDaysPerMonth) {
-        std::int64_t step = 14;
-        for (const std::int64_t s : {1, 2, 5, 7, 14}) {
-            if (static_cast<double>(s) >= wanted_step) {
-                step = s;
-                break;
-            }
-        }
-        // Whole days; multiples of 7 from a Monday (1970-01-05) for weekly steps.
-        const std::int64_t anchor = step % 7 == 0 ? 4 : 0;
-        std::int64_t d = first_day + (((anchor - first_day) % step) + step) % step;
-        for (; d <= last_day; d += step) ticks.push_back({static_cast<double>(d), date_label(d, 3)});
-    } else if (wanted_step < 8 * kDaysPerMonth) {
-        int months = 6;
-        for (const int m : {1, 2, 3, 6}) {
-            if (m * kDaysPerMonth >= wanted_step) {
-                months = m;
-                break;
-            }
-        }
-        Civil c = civil_from_days(first_day);
-        std::int64_t y = c.year;
-        int m = c.month;
-        if (c.day != 1) ++m;
-        while ((m - 1) % months != 0) ++m;
-        for (;;) {
-            while (m > 12) {
-                m -= 12;
-                ++y;
-            }
-            const std::int64_t d = days_from_civil(y, m, 1);
-            if (d > last_day) break;
-            ticks.push_back({static_cast<double>(d), date_label(d, 2)});
-            m += months;
-        }
-    } else {
-        const auto years = static_cast<std::int64_t>(std::max(1.0, nice_number(wanted_step / kDaysPerYear, true)));
-        const Civil c = civil_from_days(first_day);
-        std::int64_t y = c.year + ((c.month == 1 && c.day == 1) ? 0 : 1);
-        y += ((-y) % years + years) % years;
-        for (;; y += years) {
-            const std::int64_t d = days_from_civil(y, 1, 1);
-            if (d > last_day) break;
-            ticks.push_back({static_cast<double>(d), date_label(d, 1)});
-        }
-    }
-    return ticks;
 }
 
 SvgPlot::SvgPlot(std::string title, Axis x_axis, Axis y_axis)
@@ -403,25 +325,7 @@ bool SvgPlot::empty() const {
 std::string SvgPlot::render() const {
     // Data ranges: everything that is drawn.
     Range xr, yr;
-    for (const auto& s : points_) {
-        for (std::size_t i = 0; i < s.x.size(); ++i) {
-            xr.add(s.x[i]);
-            const double e = s.y_error.empty() ? 0.0 : s.y_error[i];
-            yr.add(s.y[i] - e);
-            yr.add(s.y[i] + e);
-        }
-    }
-    for (const auto& s : lines_) {
-        for (const double v : s.x) xr.add(v);
-        for (const double v : s.y) yr.add(v);
-    }
-    for (const auto& b : bands_) {
-        for (const double v : b.x) xr.add(v);
-        for (const double v : b.lower) yr.add(v);
-        for (const double v : b.upper) yr.add(v);
-    }
-    for (const auto& h : hlines_) yr.add(h.y);
-    for (const auto& v : vlines_) xr.add(v.x);
+    add_data_ranges(points_, lines_, bands_, hlines_, vlines_, xr, yr);
     if (!xr.valid() && x_axis_.format == AxisFormat::Date) {
         xr.add(0);
         xr.add(1);
@@ -434,17 +338,7 @@ std::string SvgPlot::render() const {
     const double y_lo = y_range.first, y_hi = y_range.second;
 
     // Legend entries, in drawing order of kinds.
-    std::vector<LegendEntry> legend;
-    for (const auto& s : points_)
-        if (!s.name.empty()) legend.push_back({LegendEntry::Point, s.name, s.color});
-    for (const auto& s : lines_)
-        if (!s.name.empty()) legend.push_back({LegendEntry::Line, s.name, s.color, s.dashed});
-    for (const auto& b : bands_)
-        if (!b.name.empty()) legend.push_back({LegendEntry::Area, b.name, b.color, false, b.opacity});
-    for (const auto& h : hlines_)
-        if (!h.name.empty()) legend.push_back({LegendEntry::HRule, h.name, h.color, h.dashed});
-    for (const auto& v : vlines_)
-        if (!v.name.empty()) legend.push_back({LegendEntry::VRule, v.name, v.color, v.dashed});
+    const std::vector<LegendEntry> legend = legend_entries(points_, lines_, bands_, hlines_, vlines_);
     // Lay the legend out in rows across the plot width.
     const double legend_width = width_ - kMarginLeft - kMarginRight;
     std::vector<std::pair<double, int>> legend_pos;  // x offset, row
@@ -540,21 +434,7 @@ std::string SvgPlot::render() const {
         for (std::size_t i = 0; i < s.x.size(); ++i) o << (i ? " " : "") << fmt(px(s.x[i])) << ',' << fmt(py(s.y[i]));
         o << "\"/>\n";
     }
-    for (const auto& s : points_) {
-        if (s.x.empty()) continue;
-        o << "<g class=\"points\" fill=\"" << xml_escape(s.color) << "\" stroke=\"" << xml_escape(s.color) << "\" stroke-width=\"1.2\">\n";
-        for (std::size_t i = 0; i < s.x.size(); ++i) {
-            const double cx = px(s.x[i]);
-            if (!s.y_error.empty() && s.y_error[i] > 0) {
-                const double y1 = py(s.y[i] - s.y_error[i]), y2 = py(s.y[i] + s.y_error[i]);
-                o << "<path class=\"errorbar\" fill=\"none\" d=\"M" << fmt(cx) << ',' << fmt(y1) << " L" << fmt(cx) << ',' << fmt(y2) << " M"
-                  << fmt(cx - kErrorCapHalfWidth) << ',' << fmt(y1) << " L" << fmt(cx + kErrorCapHalfWidth) << ',' << fmt(y1) << " M"
-                  << fmt(cx - kErrorCapHalfWidth) << ',' << fmt(y2) << " L" << fmt(cx + kErrorCapHalfWidth) << ',' << fmt(y2) << "\"/>\n";
-            }
-            o << "<circle cx=\"" << fmt(cx) << "\" cy=\"" << fmt(py(s.y[i])) << "\" r=\"" << fmt(kPointRadius) << "\"/>\n";
-        }
-        o << "</g>\n";
-    }
+    for (const auto& s : points_) write_points(o, s, px, py);
     o << "</g>\n";
     // Labels of the vertical lines, at their top inside the plot, one below the other.
     int vline_label_row = 0;
@@ -581,37 +461,7 @@ std::string SvgPlot::render() const {
     }
 
     // Legend.
-    if (!legend.empty()) {
-        o << "<g class=\"legend\">\n";
-        for (std::size_t i = 0; i < legend.size(); ++i) {
-            const auto& e = legend[i];
-            const double x = kMarginLeft + legend_pos[i].first;
-            const double y = kTitleHeight + legend_pos[i].second * kLegendRowHeight + kLegendRowHeight / 2;
-            const std::string c = xml_escape(e.color);
-            switch (e.kind) {
-                case LegendEntry::Point:
-                    o << "<circle cx=\"" << fmt(x + 9) << "\" cy=\"" << fmt(y) << "\" r=\"" << fmt(kPointRadius) << "\" fill=\"" << c << "\"/>"
-                      << "<line x1=\"" << fmt(x + 9) << "\" y1=\"" << fmt(y - 6) << "\" x2=\"" << fmt(x + 9) << "\" y2=\"" << fmt(y + 6)
-                      << "\" stroke=\"" << c << "\"/>\n";
-                    break;
-                case LegendEntry::Line:
-                case LegendEntry::HRule:
-                    o << "<line x1=\"" << fmt(x) << "\" y1=\"" << fmt(y) << "\" x2=\"" << fmt(x + 18) << "\" y2=\"" << fmt(y) << "\" stroke=\"" << c
-                      << "\" stroke-width=\"1.8\"" << (e.dashed ? " stroke-dasharray=\"4 2\"" : "") << "/>\n";
-                    break;
-                case LegendEntry::Area:
-                    o << "<rect x=\"" << fmt(x) << "\" y=\"" << fmt(y - 5) << "\" width=\"18\" height=\"10\" fill=\"" << c << "\" fill-opacity=\""
-                      << fmt(std::max(e.opacity, 0.3)) << "\"/>\n";
-                    break;
-                case LegendEntry::VRule:
-                    o << "<line x1=\"" << fmt(x + 9) << "\" y1=\"" << fmt(y - 6) << "\" x2=\"" << fmt(x + 9) << "\" y2=\"" << fmt(y + 6)
-                      << "\" stroke=\"" << c << "\" stroke-width=\"1.2\"" << (e.dashed ? " stroke-dasharray=\"3 3\"" : "") << "/>\n";
-                    break;
-            }
-            o << "<text x=\"" << fmt(x + kLegendSymbolWidth) << "\" y=\"" << fmt(y + 4) << "\">" << xml_escape(e.name) << "</text>\n";
-        }
-        o << "</g>\n";
-    }
+    if (!legend.empty()) write_legend(o, legend, legend_pos);
     o << "</svg>\n";
     return o.str();
 }

@@ -144,7 +144,7 @@ void check_text_field(const std::string& field, std::string_view value, std::siz
 [[nodiscard]] inline std::string csv_field(std::string_view s) {
     std::string cell;
     if (!s.empty() && (s[0] == '=' || s[0] == '+' || s[0] == '-' || s[0] == '@' || s[0] == '\t' || s[0] == '\r') && !is_plain_number(s))
-        cell = "'";
+        cell.push_back('\'');
     cell += escape_text(s);
     if (cell.find_first_of(",\"") == std::string::npos) return cell;
     std::string out = "\"";

@@ -7,6 +7,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -102,3 +103,34 @@ TEST_F(HostileSiteCli, AnEarlierSiteIsReplacedWhole) {
 }
 
 }  // namespace
+
+TEST_F(HostileSiteCli, LongHistoriesAreSummarisedAndEverySessionIsInTheLinkedList) {
+    const fs::path site = dir_ / "summarised";
+    // Three sessions a tail: above --full-history-max 2 each position (and its serial) is summarised.
+    const auto r = run_cli("site --db " + db() + " --out " + site.string() + " --full-history-max 2 --recent-sessions 1");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_THAT(r.output, HasSubstr("index.html and 3 tail pages, 3 session lists"));
+    for (const char* tail : {"N1EM", "N2-EM", "N3EM"}) {
+        const std::string list = "tail-" + std::string(tail) + ".position-1.csv";
+        const std::string page = read(site / "tails" / ("tail-" + std::string(tail) + ".html"));
+        EXPECT_THAT(page, HasSubstr("Long history: 3 sessions.")) << tail;
+        EXPECT_THAT(page, HasSubstr("Session history (3, 1 listed)")) << tail;
+        // The serial holds the position's sessions: both sections link the one list.
+        EXPECT_EQ(page.find("href=\"" + list + "\"") != std::string::npos, true) << tail;
+        EXPECT_NE(page.find("href=\"" + list + "\"", page.find("id=\"serial-1\"")), std::string::npos) << tail;
+        EXPECT_FALSE(fs::exists(site / "tails" / ("tail-" + std::string(tail) + ".serial-1.csv"))) << tail;
+        const std::string csv = read(site / "tails" / list);
+        EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 4) << csv;
+    }
+    // An earlier site with its lists is replaced whole; without the option nothing is summarised.
+    const auto again = run_cli("site --db " + db() + " --out " + site.string());
+    ASSERT_EQ(again.exit_code, 0) << again.output;
+    EXPECT_FALSE(fs::exists(site / "tails" / "tail-N1EM.position-1.csv"));
+    EXPECT_THAT(read(site / "tails" / "tail-N1EM.html"), Not(HasSubstr("Long history")));
+    // A list the tool did not write (no tail- prefix) makes the folder foreign.
+    std::ofstream(site / "tails" / "notes.csv") << "mine";
+    const auto foreign = run_cli("site --db " + db() + " --out " + site.string());
+    EXPECT_NE(foreign.exit_code, 0);
+    EXPECT_THAT(foreign.output, HasSubstr("notes.csv, which this command did not write"));
+    EXPECT_TRUE(fs::exists(site / "tails" / "notes.csv"));
+}
