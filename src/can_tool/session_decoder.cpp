@@ -1,6 +1,6 @@
 #include "can_tool/session_decoder.hpp"
 
-#include "can_tool/test_sequence.hpp"
+#include "can_tool/bus_sequence.hpp"
 #include "core/emadiag_error.hpp"
 #include "emadiag/sim/simulator.hpp"
 

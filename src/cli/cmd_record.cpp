@@ -4,7 +4,7 @@
 #include "cli/interrupt.hpp"
 
 #include "can_tool/recorder.hpp"
-#include "can_tool/test_sequence.hpp"
+#include "can_tool/bus_sequence.hpp"
 #include "core/emadiag_error.hpp"
 #include "core/run_csv.hpp"
 #include "emadiag/can/can_bus.hpp"

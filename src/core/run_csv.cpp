@@ -50,6 +50,66 @@ bool parse_double(const std::string& text, double& out) {
     return ec == std::errc() && ptr == last;
 }
 
+/// The problems of one file, each "NAME:LINE: message", the first kMaxReportedProblems kept.
+struct CsvProblems {
+    const std::string& name;
+    std::vector<std::string> list;
+    void operator()(std::size_t line, const std::string& msg) {
+        if (list.size() < kMaxReportedProblems) list.push_back(name + ":" + std::to_string(line) + ": " + msg);
+    }
+};
+
+/// The encoding, from the first bytes: a UTF-8 byte order mark is skipped (the text after it is the
+/// same); UTF-16 (a spreadsheet's "Unicode text") is refused with the fix.
+void check_first_line_encoding(std::string& line, const std::string& name) {
+    static constexpr std::string_view kUtf8Bom = "\xEF\xBB\xBF";
+    if (line.rfind(kUtf8Bom, 0) == 0) line.erase(0, kUtf8Bom.size());
+    const bool utf16_bom = line.rfind("\xFF\xFE", 0) == 0 || line.rfind("\xFE\xFF", 0) == 0;
+    if (utf16_bom || line.find('\0') != std::string::npos) {
+        throw EmadiagError("invalid run CSV: " + name + ": line 1 " +
+                           (utf16_bom ? "starts with a UTF-16 byte order mark" : "holds NUL bytes") +
+                           ": the file looks UTF-16 encoded; save it as UTF-8 or ASCII text (e.g. iconv -f UTF-16 -t UTF-8)");
+    }
+}
+
+/// The run's constants, case and sequence from its metadata (read before), each missing or bad value
+/// a problem at the line that set it.
+void read_required_metadata(Run& run, const std::vector<std::pair<std::string, std::size_t>>& meta_line, CsvProblems& problem) {
+    const auto line_of = [&](const std::string& key) -> std::size_t {
+        for (const auto& [k, l] : meta_line)
+            if (k == key) return l;
+        return 1;
+    };
+    auto need = [&](const char* key, double& dst, bool positive) {
+        const auto v = run.meta_value(key);
+        if (!v) {
+            problem(1, std::string("missing metadata key '") + key + "'");
+            return;
+        }
+        double x;
+        if (!parse_double(*v, x) || !std::isfinite(x) || (positive && !(x > 0))) {
+            problem(line_of(key), std::string("metadata ") + key + "=" + *v + " is not a positive number");
+            return;
+        }
+        dst = x;
+    };
+    need("k_t_Nm_per_A", run.constants.k_t_nm_per_a, true);
+    need("J_kgm2", run.constants.j_kgm2, true);
+    need("tau", run.constants.tau, true);
+    need("sample_period_s", run.constants.sample_period_s, true);
+    // The one parser of each (a value it refuses is a problem reported above, with its line).
+    if (auto c = run.meta_value("case")) {
+        if (!metadata_value_problem("case", *c)) run.load_case = sim::parse_load_case(*c);
+    } else {
+        problem(1, "missing metadata key 'case'");
+    }
+    if (auto s = run.meta_value("sequence")) {
+        if (!metadata_value_problem("sequence", *s)) run.sequence = sim::parse_sequence(*s);
+    } else {
+        problem(1, "missing metadata key 'sequence'");
+    }
+}
+
 }  // namespace
 
 void write_run_csv(std::ostream& out, const Run& run) {
@@ -79,10 +139,7 @@ void write_run_csv_file(const std::string& path, const Run& run, const io::Outpu
 
 Run read_run_csv(std::istream& in, const std::string& name) {
     Run run;
-    std::vector<std::string> problems;
-    auto problem = [&](std::size_t line, const std::string& msg) {
-        if (problems.size() < kMaxReportedProblems) problems.push_back(name + ":" + std::to_string(line) + ": " + msg);
-    };
+    CsvProblems problem{name, {}};
     std::string line;
     std::size_t line_no = 0;
     std::vector<std::string> header;
@@ -92,18 +149,7 @@ Run read_run_csv(std::istream& in, const std::string& name) {
     bool too_long = false;
     while (io::read_bounded_line(in, line, kCsvMaxLineBytes, too_long)) {
         ++line_no;
-        if (line_no == 1) {
-            // The encoding, from the first bytes: a UTF-8 byte order mark is skipped (the text after it
-            // is the same); UTF-16 (a spreadsheet's "Unicode text") is refused with the fix.
-            static constexpr std::string_view kUtf8Bom = "\xEF\xBB\xBF";
-            if (line.rfind(kUtf8Bom, 0) == 0) line.erase(0, kUtf8Bom.size());
-            const bool utf16_bom = line.rfind("\xFF\xFE", 0) == 0 || line.rfind("\xFE\xFF", 0) == 0;
-            if (utf16_bom || line.find('\0') != std::string::npos) {
-                throw EmadiagError("invalid run CSV: " + name + ": line 1 " +
-                                   (utf16_bom ? "starts with a UTF-16 byte order mark" : "holds NUL bytes") +
-                                   ": the file looks UTF-16 encoded; save it as UTF-8 or ASCII text (e.g. iconv -f UTF-16 -t UTF-8)");
-            }
-        }
+        if (line_no == 1) check_first_line_encoding(line, name);
         if (too_long) {
             problem(line_no, "line longer than the limit kCsvMaxLineBytes = " + std::to_string(kCsvMaxLineBytes) + " bytes");
             if (++bad_rows > kCsvMaxBadRows) break;
@@ -195,42 +241,10 @@ Run read_run_csv(std::istream& in, const std::string& name) {
     }
     if (header.empty()) problem(line_no, "no header row (expected t_s,current_A,...)");
     (void)header_line;
-    const auto line_of = [&](const std::string& key) -> std::size_t {
-        for (const auto& [k, l] : meta_line)
-            if (k == key) return l;
-        return 1;
-    };
-    auto need = [&](const char* key, double& dst, bool positive) {
-        const auto v = run.meta_value(key);
-        if (!v) {
-            problem(1, std::string("missing metadata key '") + key + "'");
-            return;
-        }
-        double x;
-        if (!parse_double(*v, x) || !std::isfinite(x) || (positive && !(x > 0))) {
-            problem(line_of(key), std::string("metadata ") + key + "=" + *v + " is not a positive number");
-            return;
-        }
-        dst = x;
-    };
-    need("k_t_Nm_per_A", run.constants.k_t_nm_per_a, true);
-    need("J_kgm2", run.constants.j_kgm2, true);
-    need("tau", run.constants.tau, true);
-    need("sample_period_s", run.constants.sample_period_s, true);
-    // The one parser of each (a value it refuses is a problem reported above, with its line).
-    if (auto c = run.meta_value("case")) {
-        if (!metadata_value_problem("case", *c)) run.load_case = sim::parse_load_case(*c);
-    } else {
-        problem(1, "missing metadata key 'case'");
-    }
-    if (auto s = run.meta_value("sequence")) {
-        if (!metadata_value_problem("sequence", *s)) run.sequence = sim::parse_sequence(*s);
-    } else {
-        problem(1, "missing metadata key 'sequence'");
-    }
-    if (!problems.empty()) {
+    read_required_metadata(run, meta_line, problem);
+    if (!problem.list.empty()) {
         std::string msg = "invalid run CSV:";
-        for (const auto& p : problems) msg += "\n  " + p;
+        for (const auto& p : problem.list) msg += "\n  " + p;
         throw EmadiagError(msg);
     }
     return run;

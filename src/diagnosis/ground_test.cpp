@@ -5,7 +5,7 @@
 #include "diagnosis/session_storage.hpp"
 
 #include "can_tool/candump_run.hpp"
-#include "can_tool/test_sequence.hpp"
+#include "can_tool/bus_sequence.hpp"
 
 #include "core/emadiag_error.hpp"
 #include "core/run_csv.hpp"

@@ -4,6 +4,9 @@
 #include "discovery/screening/candidate_effect.hpp"
 #include "emadiag/sim/sim_error.hpp"
 #include "estimation/health_estimate.hpp"
+#include "estimation/health_parameter.hpp"
+
+#include <optional>
 
 namespace emadiag::discovery {
 
@@ -57,11 +60,17 @@ void apply_model(const nlohmann::json& model, sim::EmaParams& params) {
                 continue;
             }
             const double x = v["value"].get<double>();
-            if (name == kParamFdj) p.fdj_nm = x;
-            else if (name == kParamFsj) p.fsj_nm = x;
-            else if (name == kParamEtaO) { p.eta_o = x; eta_o_set = true; }
-            else if (name == kParamEtaA) { p.eta_a = x; eta_a_set = true; }
-            else problems.push_back("model.health." + name + ": unknown health parameter");
+            const std::optional<HealthParameter> parameter = parse_health_parameter(name);
+            if (!parameter) {
+                problems.push_back("model.health." + name + ": unknown health parameter");
+                continue;
+            }
+            switch (*parameter) {
+                case HealthParameter::Fdj: p.fdj_nm = x; break;
+                case HealthParameter::Fsj: p.fsj_nm = x; break;
+                case HealthParameter::EtaO: p.eta_o = x; eta_o_set = true; break;
+                case HealthParameter::EtaA: p.eta_a = x; eta_a_set = true; break;
+            }
         }
     }
     if (eta_o_set && !eta_a_set) p.eta_a = sim::eta_a_from_eta_o(p.eta_o, p.tau);
