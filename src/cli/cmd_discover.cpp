@@ -211,9 +211,7 @@ Run run_from_stored(const db::StoredRun& s) {
         for (const auto& [k, v] : meta.items()) r.set_meta(k, v.is_string() ? v.get<std::string>() : v.dump());
     }
     r.set_required_meta();
-    for (const auto& x : s.samples) {
-        r.samples.push_back(RunSample{x.t_s, x.current_a, x.speed_rad_s, x.theta_m_rad, x.hinge_moment_nm, x.command_deg});
-    }
+    r.samples = s.samples;
     return r;
 }
 

@@ -2,6 +2,7 @@
 // The one record of a test run (ARCHITECTURE.md): the section-6 samples of ema-reference.md,
 // the actuator's constants and the run's metadata. Every source produces it (simulator,
 // CAN recorder, CSV and candump readers); every consumer reads it.
+#include "emadiag/record/run_sample.hpp"
 #include "emadiag/sim/simulator.hpp"
 
 #include <map>
@@ -14,14 +15,6 @@ namespace emadiag {
 /// A double with 17 significant digits: reading it back gives the same double.
 [[nodiscard]] std::string format_exact(double v);
 
-struct RunSample {
-    double t_s = 0;
-    double current_a = 0;
-    double speed_rad_s = 0;
-    double theta_m_rad = 0;
-    double hinge_moment_nm = 0;
-    double command_deg = 0;
-};
 
 /// Characterised constants of the actuator (from the identification message or the CSV header).
 struct RunConstants {

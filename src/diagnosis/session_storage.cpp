@@ -33,9 +33,7 @@ db::StoredRun to_stored_run(const Run& run, const std::string& tail, const std::
     nlohmann::json meta = nlohmann::json::object();
     for (const auto& [k, v] : run.meta) meta[k] = v;
     s.meta_json = meta.dump();
-    s.samples.reserve(run.samples.size());
-    for (const auto& x : run.samples)
-        s.samples.push_back({x.t_s, x.current_a, x.speed_rad_s, x.theta_m_rad, x.hinge_moment_nm, x.command_deg});
+    s.samples = run.samples;
     if (estimates) {
         for (const auto& h : estimates->estimates)
             for (const auto& p : h.parameters) s.estimates.push_back({to_string(h.estimator), p.name, p.value, p.std_error, p.identifiable, p.method, p.note});

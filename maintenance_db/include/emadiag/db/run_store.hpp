@@ -3,6 +3,7 @@
 // stored with its test session (session_store.hpp), in the session's one transaction: either all
 // there or not there at all.
 #include "emadiag/db/database.hpp"
+#include "emadiag/record/run_sample.hpp"
 
 #include <cstdint>
 #include <optional>
@@ -11,9 +12,8 @@
 
 namespace emadiag::db {
 
-struct StoredSample {
-    double t_s = 0, current_a = 0, speed_rad_s = 0, theta_m_rad = 0, hinge_moment_nm = 0, command_deg = 0;
-};
+/// A stored sample is the run's sample (emadiag/record/run_sample.hpp): one shape, no copying field by field.
+using StoredSample = RunSample;
 
 struct StoredEstimate {
     std::string estimator;  ///< "physics", "network"
