@@ -188,13 +188,13 @@ struct DiscoveryReport {
     [[nodiscard]] nlohmann::json to_json() const;
 };
 
-/// d T_R,model / d parameter ("fdj_nm", "eta_o") per sample, by a forward difference of two
+/// d T_R,model / d parameter (FDJ, eta_O) per sample, by a forward difference of two
 /// re-simulations of `p` (`model` is the re-simulation of `p`).
 [[nodiscard]] std::vector<double> sensitivity(const Run& run, const sim::EmaParams& p, const RunSignals& model,
-                                              const std::string& name);
+                                              const FitParameter& parameter);
 /// sensitivity for each of `names`, the re-simulations side by side (resimulate_many).
 [[nodiscard]] std::vector<std::vector<double>> sensitivities(const Run& run, const sim::EmaParams& p, const RunSignals& model,
-                                                             const std::vector<std::string>& names);
+                                                             const std::vector<FitParameter>& names);
 
 /// Throws EmadiagError on a run that cannot be analysed (NaN, too few samples or screening
 /// samples, unknown case/sequence), naming the field, the value and the limit.

@@ -38,8 +38,8 @@ void adopt_trajectory_fit(Context& ctx, const FitResult& fit);
 
 /// The own parameters of the model `q`: the health, the fitted values of the effects added (but
 /// `skip`) and the coefficients of q's terms.
-[[nodiscard]] std::vector<std::string> own_parameter_names(const Context& ctx, const sim::EmaParams& q,
-                                                           std::optional<EffectKind> skip = std::nullopt);
+[[nodiscard]] std::vector<FitParameter> own_parameters(const Context& ctx, const sim::EmaParams& q,
+                                                       std::optional<EffectKind> skip = std::nullopt);
 
 /// The own parameters of the model `from` (health, the effects' values, the terms' coefficients)
 /// refitted on the trajectory: the values from the trajectory, each standard error at least the

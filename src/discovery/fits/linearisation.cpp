@@ -6,7 +6,7 @@
 namespace emadiag::discovery::pipeline {
 
 TrajectoryLinearisation linearise_trajectory(const Run& run, const RunSignals& s, const NoiseFloor& floor, double fsj_base_nm,
-                                             const std::vector<std::string>& model_names, const sim::EmaParams& p,
+                                             const std::vector<FitParameter>& model_parameters, const sim::EmaParams& p,
                                              const RunSignals& model_sim, const std::vector<sim::EmaParams>& probes,
                                              const std::vector<double>& probe_steps) {
     TrajectoryLinearisation lin;
@@ -14,12 +14,12 @@ TrajectoryLinearisation linearise_trajectory(const Run& run, const RunSignals& s
     const auto n_rows = static_cast<Eigen::Index>(e_rows.size());
     std::vector<sim::EmaParams> batch;
     std::vector<double> steps;
-    for (const auto& name : model_names) {
+    for (const FitParameter& name : model_parameters) {
         const double v = get_parameter(p, name);
-        const bool health = name == "fdj_nm" || name == "eta_o";
+        const bool health = name.is_health();
         double h = health || v == 0.0 ? std::max(kSensitivityStepRel * std::abs(v), kSensitivityStepMin)
                                       : kSensitivityStepRel * std::abs(v);
-        if (name == "eta_o" && v + h > 1.0) h = -h;
+        if (name == FitParameter::eta_o() && v + h > 1.0) h = -h;
         sim::EmaParams q = p;
         set_parameter(q, name, v + h);
         q.fsj_nm = std::max(fsj_base_nm, q.fdj_nm);
@@ -42,14 +42,14 @@ TrajectoryLinearisation linearise_trajectory(const Run& run, const RunSignals& s
         for (Eigen::Index i = 0; i < n_rows; ++i) c(i) = (lin.e(i) - r[static_cast<std::size_t>(i)]) / steps[j];
         return c;
     };
-    const auto nh = static_cast<Eigen::Index>(model_names.size());
+    const auto nh = static_cast<Eigen::Index>(model_parameters.size());
     lin.hcols.resize(n_rows, nh);
     for (Eigen::Index j = 0; j < nh; ++j) lin.hcols.col(j) = column(static_cast<std::size_t>(j));
     const Eigen::HouseholderQR<Eigen::MatrixXd> qr(lin.hcols);
     lin.q = qr.householderQ() * Eigen::MatrixXd::Identity(n_rows, nh);
     lin.e0 = lin.e - lin.q * (lin.q.transpose() * lin.e);
     lin.rss0 = lin.e0.squaredNorm();
-    for (std::size_t i = 0; i < probes.size(); ++i) lin.probes.push_back(column(model_names.size() + i));
+    for (std::size_t i = 0; i < probes.size(); ++i) lin.probes.push_back(column(model_parameters.size() + i));
     return lin;
 }
 

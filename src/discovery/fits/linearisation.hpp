@@ -12,7 +12,7 @@
 namespace emadiag::discovery::pipeline {
 
 /// The trajectory linearised around the model `p`: its rows e = measured - model (trajectory_rows, in
-/// noise floors), the columns of the model's own parameters `model_names` (forward differences) and of
+/// noise floors), the columns of the model's own parameters `model_parameters` (forward differences) and of
 /// each probe (the model with one candidate effect at a small amplitude, per unit of it), from one batch
 /// of re-simulations.
 struct TrajectoryLinearisation {
@@ -26,7 +26,7 @@ struct TrajectoryLinearisation {
 };
 
 [[nodiscard]] TrajectoryLinearisation linearise_trajectory(const Run& run, const RunSignals& s, const NoiseFloor& floor, double fsj_base_nm,
-                                             const std::vector<std::string>& model_names, const sim::EmaParams& p,
+                                             const std::vector<FitParameter>& model_parameters, const sim::EmaParams& p,
                                              const RunSignals& model_sim, const std::vector<sim::EmaParams>& probes,
                                              const std::vector<double>& probe_steps);
 
@@ -34,7 +34,7 @@ struct TrajectoryLinearisation {
 /// probe amplitude `probe` (its unit) and the shape into a copy of `p`.
 template <class SetProbe>
 TrajectoryLinearisation linearise_over_shapes(const Run& run, const RunSignals& s, const NoiseFloor& floor, double fsj_base_nm,
-                                              const std::vector<std::string>& model_names, const sim::EmaParams& p,
+                                              const std::vector<FitParameter>& model_parameters, const sim::EmaParams& p,
                                               const RunSignals& model_sim, const std::vector<EffectShape>& grid, double probe,
                                               SetProbe set) {
     std::vector<sim::EmaParams> probes;
@@ -43,7 +43,7 @@ TrajectoryLinearisation linearise_over_shapes(const Run& run, const RunSignals& 
         set(q, shape);
         probes.push_back(q);
     }
-    return linearise_trajectory(run, s, floor, fsj_base_nm, model_names, p, model_sim, probes, std::vector<double>(probes.size(), probe));
+    return linearise_trajectory(run, s, floor, fsj_base_nm, model_parameters, p, model_sim, probes, std::vector<double>(probes.size(), probe));
 }
 
 /// How much the chi-square of the torque residual's window means (against their floor) rises from the

@@ -11,18 +11,18 @@ using pipeline::kSensitivityStepRel;
 
 /// d T_R,model / d parameter per sample, by a forward difference of two re-simulations.
 std::vector<double> sensitivity(const Run& run, const sim::EmaParams& p, const RunSignals& model,
-                                const std::string& name) {
-    return sensitivities(run, p, model, {name}).at(0);
+                                const FitParameter& parameter) {
+    return sensitivities(run, p, model, {parameter}).at(0);
 }
 
 std::vector<std::vector<double>> sensitivities(const Run& run, const sim::EmaParams& p, const RunSignals& model,
-                                               const std::vector<std::string>& names) {
+                                               const std::vector<FitParameter>& names) {
     std::vector<double> steps;
     std::vector<sim::EmaParams> moved_params;
-    for (const auto& name : names) {
+    for (const FitParameter& name : names) {
         const double v = get_parameter(p, name);
         double h = std::max(kSensitivityStepRel * std::abs(v), kSensitivityStepMin);
-        if (name == "eta_o" && v + h > 1.0) h = -h;
+        if (name == FitParameter::eta_o() && v + h > 1.0) h = -h;
         sim::EmaParams q = p;
         set_parameter(q, name, v + h);
         steps.push_back(h);

@@ -11,9 +11,9 @@ FitResult fit_terms(const Context& ctx, const sim::EmaParams& base, const std::v
     const double fsj_base_nm = ctx.fsj_base_nm;
     sim::EmaParams start = base;
     start.fsj_nm = std::max(fsj_base_nm, start.fdj_nm);
-    std::vector<std::string> names = ctx.health_names;
+    std::vector<FitParameter> names = ctx.health_parameters;
     for (const auto& t : extra) {
-        names.push_back(term_parameter(start.terms.size()));
+        names.push_back(FitParameter::term(start.terms.size()));
         start.terms.push_back(t);
     }
     return fit_by_resimulation(ctx.run, ctx.signals, start, names, ctx.mask, fsj_base_nm, kFitWindowSamples, &base, max_iterations);
@@ -23,21 +23,25 @@ LibraryFit fit_library(const Context& ctx, const CandidateEvidence& win) {
     const RunSignals& s = ctx.signals;
     const sim::EmaParams& p = ctx.params;
     const std::vector<char>& mask = ctx.mask;
-    const std::vector<std::string>& health_names = ctx.health_names;
+    const std::vector<FitParameter>& health_parameters = ctx.health_parameters;
     const double fsj_base_nm = ctx.fsj_base_nm;
     LibraryFit out;
     sim::EmaParams start = p;
     start.fsj_nm = std::max(fsj_base_nm, start.fdj_nm);
-    for (const auto& [name, value] : sim_effects(win.shape, win.amplitude, p.j_kgm2)) {
-        if (name == "ripple_periods") start.effects.set(name, value);  // scanned, not fitted
-        else set_parameter(start, name, value);
+    // sim_effects gives the fitted effects first, in the order of fitted_sim_effects; the rest are
+    // scanned, not fitted (ripple_periods).
+    const std::vector<FittedEffect> fitted = fitted_sim_effects(win.shape.kind);
+    const std::vector<std::pair<std::string, double>> effects = sim_effects(win.shape, win.amplitude, p.j_kgm2);
+    for (std::size_t i = 0; i < effects.size(); ++i) {
+        if (i < fitted.size()) set_parameter(start, FitParameter::effect(fitted[i]), effects[i].second);
+        else start.effects.set(effects[i].first, effects[i].second);
     }
-    std::vector<std::string> names = health_names;
-    for (const auto& n : fitted_sim_effects(win.shape.kind)) names.push_back(n);
+    std::vector<FitParameter> names = health_parameters;
+    for (const FittedEffect n : fitted) names.push_back(FitParameter::effect(n));
     // Ripple changes sign within a window of samples: it is fitted per sample.
     out.fit = fit_by_resimulation(ctx.run, s, start, names, mask, fsj_base_nm,
                                   win.shape.kind == EffectKind::Ripple ? 1 : kFitWindowSamples, &p);
-    const FittedValue& amp = out.fit.values[health_names.size()];
+    const FittedValue& amp = out.fit.values[health_parameters.size()];
     const double rows = static_cast<double>(out.fit.rows);
     const double grid = static_cast<double>(std::max<std::size_t>(1, shape_grid(win.shape.kind, s).size()));
     out.bic = rows * std::log(out.fit.cost_reference / out.fit.cost_end) -

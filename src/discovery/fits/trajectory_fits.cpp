@@ -12,12 +12,12 @@ namespace emadiag::discovery::pipeline {
 
 void record_health(std::vector<HealthValue>& health, const FitResult& fit) {
     for (const auto& f : fit.values) {
-        if (f.name == "fdj_nm") {
+        if (f.parameter == FitParameter::fdj()) {
             auto* h = find_health(health, kParamFdj);
             h->value = f.value;
             h->std_error = f.std_error;
             h->source = "refit";
-        } else if (f.name == "eta_o") {
+        } else if (f.parameter == FitParameter::eta_o()) {
             auto* h = find_health(health, kParamEtaO);
             h->value = f.value;
             h->std_error = f.std_error;
@@ -34,7 +34,7 @@ void record_health(std::vector<HealthValue>& health, const FitResult& fit) {
 
 void record_term_errors(sim::EmaParams& q, const FitResult& fit) {
     for (const auto& f : fit.values) {
-        if (is_term_parameter(f.name)) q.terms[std::stoul(f.name.substr(5))].std_error = f.std_error;
+        if (f.parameter.kind() == FitParameter::Kind::Term) q.terms[f.parameter.term_index()].std_error = f.std_error;
     }
 }
 
@@ -45,8 +45,8 @@ void adopt_trajectory_fit(Context& ctx, const FitResult& fit) {
     record_health(ctx.health(), fit);
     record_term_errors(p, fit);
     for (const auto& f : fit.values) {
-        if (f.name == "fdj_nm" || f.name == "eta_o" || is_term_parameter(f.name)) continue;
-        const std::string field = effect_field(f.name);
+        if (f.parameter.kind() != FitParameter::Kind::Effect) continue;
+        const std::string field = effect_field(effect_name(f.parameter.fitted_effect()));
         bool known = false;
         for (auto& t : rep.model.terms) {
             if (t.effect == field) {
@@ -66,13 +66,13 @@ void adopt_trajectory_fit(Context& ctx, const FitResult& fit) {
     ctx.traj_now = trajectory_error(ctx.signals, ctx.model_sim, ctx.floor);
 }
 
-std::vector<std::string> own_parameter_names(const Context& ctx, const sim::EmaParams& q, std::optional<EffectKind> skip) {
-    std::vector<std::string> names = ctx.health_names;
+std::vector<FitParameter> own_parameters(const Context& ctx, const sim::EmaParams& q, std::optional<EffectKind> skip) {
+    std::vector<FitParameter> names = ctx.health_parameters;
     for (const auto& a : ctx.accepted) {
         if (skip && a.kind == *skip) continue;
-        for (const auto& n : fitted_sim_effects(a.kind)) names.push_back(n);
+        for (const FittedEffect n : fitted_sim_effects(a.kind)) names.push_back(FitParameter::effect(n));
     }
-    for (std::size_t i = 0; i < q.terms.size(); ++i) names.push_back(term_parameter(i));
+    for (std::size_t i = 0; i < q.terms.size(); ++i) names.push_back(FitParameter::term(i));
     return names;
 }
 
@@ -81,7 +81,7 @@ TrajectoryRefit refit_on_trajectory(const Context& ctx, const sim::EmaParams& fr
     const NoiseFloor& floor = ctx.floor;
     const double fsj_base_nm = ctx.fsj_base_nm;
     const std::vector<HealthValue>& health = ctx.health();
-    const std::vector<std::string> names = own_parameter_names(ctx, from);
+    const std::vector<FitParameter> names = own_parameters(ctx, from);
     sim::EmaParams start = from;
     start.fsj_nm = std::max(fsj_base_nm, start.fdj_nm);
     TrajectoryRefit r;
@@ -89,12 +89,12 @@ TrajectoryRefit refit_on_trajectory(const Context& ctx, const sim::EmaParams& fr
     r.cost = trajectory_error(s, r.fit.signals, floor).cost;
     for (auto& v : r.fit.values) {
         double before = 0;
-        if (v.name == "fdj_nm") before = find_health(health, kParamFdj)->std_error;
-        else if (v.name == "eta_o") before = find_health(health, kParamEtaO)->std_error;
-        else if (is_term_parameter(v.name)) before = from.terms[std::stoul(v.name.substr(5))].std_error;
+        if (v.parameter == FitParameter::fdj()) before = find_health(health, kParamFdj)->std_error;
+        else if (v.parameter == FitParameter::eta_o()) before = find_health(health, kParamEtaO)->std_error;
+        else if (v.parameter.kind() == FitParameter::Kind::Term) before = from.terms[v.parameter.term_index()].std_error;
         else {
             for (const auto& t : ctx.rep.model.terms) {
-                if (t.effect == effect_field(v.name)) before = t.std_error;
+                if (t.effect == effect_field(effect_name(v.parameter.fitted_effect()))) before = t.std_error;
             }
         }
         v.std_error = std::max(v.std_error, before);

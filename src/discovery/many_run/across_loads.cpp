@@ -56,7 +56,7 @@ double term_start(const sim::Term& shape, const Run& run, const DiscoveryReport&
     p.eta_o = sim::EmaParams::datasheet().eta_o;
     p.eta_a = sim::eta_a_from_eta_o(p.eta_o, p.tau);
     const RunSignals m = resimulate_signals(resim_target(run), p);
-    const std::vector<double> f = sensitivity(run, p, m, fit_parameter_name(FitParameter::fdj()));
+    const std::vector<double> f = sensitivity(run, p, m, FitParameter::fdj());
     sim::Term unit = shape;
     unit.coefficient = 1.0;
     const std::vector<double> x = term_signature(s, unit);

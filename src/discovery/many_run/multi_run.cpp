@@ -80,7 +80,7 @@ void joint_screening(AcrossRunsReport& out, const std::vector<const Run*>& analy
         }
         for (const auto& name : names) {
             std::vector<double> col(offsets.back(), 0.0);
-            const auto c = sensitivity(run, p, m, fit_parameter_name(name));
+            const auto c = sensitivity(run, p, m, name);
             col.insert(col.end(), c.begin(), c.end());
             in.base_columns.push_back(col);
         }

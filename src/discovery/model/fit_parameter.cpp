@@ -94,13 +94,6 @@ std::size_t term_index(const FitParameter& parameter, const sim::EmaParams& p) {
 
 const char* effect_name(FittedEffect e) { return kEffectNames.at(static_cast<std::size_t>(e)); }
 
-std::optional<FittedEffect> fitted_effect(std::string_view name) {
-    for (std::size_t i = 0; i < kEffectNames.size(); ++i) {
-        if (name == kEffectNames[i]) return static_cast<FittedEffect>(i);
-    }
-    return std::nullopt;
-}
-
 std::string fit_parameter_name(const FitParameter& p) {
     switch (p.kind()) {
         case FitParameter::Kind::Fdj: return "fdj_nm";
@@ -111,27 +104,6 @@ std::string fit_parameter_name(const FitParameter& p) {
     throw EmadiagError("discovery: fit parameter of unknown kind");
 }
 
-std::optional<FitParameter> find_fit_parameter(const std::string& name) {
-    if (name.size() > kTermPrefix.size() && name.compare(0, kTermPrefix.size(), kTermPrefix) == 0 &&
-        name.find_first_not_of("0123456789", kTermPrefix.size()) == std::string::npos) {
-        return FitParameter::term(std::stoul(name.substr(kTermPrefix.size())));
-    }
-    if (name == "fdj_nm") return FitParameter::fdj();
-    if (name == "eta_o") return FitParameter::eta_o();
-    if (const auto e = fitted_effect(name)) return FitParameter::effect(*e);
-    return std::nullopt;
-}
-
-FitParameter fit_parameter_from_name(const std::string& name) {
-    if (const auto p = find_fit_parameter(name)) return *p;
-    throw EmadiagError("discovery: parameter '" + name + "' cannot be fitted");
-}
-
-bool is_term_parameter(const std::string& name) {
-    const std::optional<FitParameter> p = find_fit_parameter(name);
-    return p && p->kind() == FitParameter::Kind::Term;
-}
-
 FitRange fit_range(const FitParameter& parameter) {
     const ParamSpec& s = spec(parameter);
     return {s.lo, s.hi};
@@ -139,15 +111,11 @@ FitRange fit_range(const FitParameter& parameter) {
 
 double fit_step_floor(const FitParameter& parameter) { return spec(parameter).step_abs; }
 
-FitRange fit_range(const std::string& name) { return fit_range(fit_parameter_from_name(name)); }
-
 std::vector<std::string> fitted_effect_names() {
     std::vector<std::string> v;
     for (const auto& e : kEffectFits) v.emplace_back(effect_name(e.effect));
     return v;
 }
-
-std::string term_parameter(std::size_t index) { return fit_parameter_name(FitParameter::term(index)); }
 
 double get_parameter(const sim::EmaParams& p, const FitParameter& parameter) {
     switch (parameter.kind()) {
@@ -157,10 +125,6 @@ double get_parameter(const sim::EmaParams& p, const FitParameter& parameter) {
         case FitParameter::Kind::Effect: return p.effects.get(effect_name(parameter.fitted_effect()));
     }
     throw EmadiagError("discovery: parameter '" + fit_parameter_name(parameter) + "' cannot be fitted");
-}
-
-double get_parameter(const sim::EmaParams& p, const std::string& name) {
-    return get_parameter(p, fit_parameter_from_name(name));
 }
 
 void set_parameter(sim::EmaParams& p, const FitParameter& parameter, double value) {
@@ -178,10 +142,6 @@ void set_parameter(sim::EmaParams& p, const FitParameter& parameter, double valu
             break;
         case FitParameter::Kind::Effect: p.effects.set(effect_name(parameter.fitted_effect()), value); break;
     }
-}
-
-void set_parameter(sim::EmaParams& p, const std::string& name, double value) {
-    set_parameter(p, fit_parameter_from_name(name), value);
 }
 
 }  // namespace emadiag::discovery

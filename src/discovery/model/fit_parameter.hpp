@@ -32,8 +32,6 @@ inline constexpr std::size_t kFittedEffectCount = 10;
 
 /// The sim::Effects name of `e` ("stribeck_amplitude").
 [[nodiscard]] const char* effect_name(FittedEffect e);
-/// The fitted effect of sim::Effects name `name`; nullopt for an effect discovery does not fit.
-[[nodiscard]] std::optional<FittedEffect> fitted_effect(std::string_view name);
 
 class FitParameter {
 public:
@@ -61,15 +59,9 @@ private:
     std::size_t index_;
 };
 
-/// The one printer: "fdj_nm", "eta_o", the sim::Effects name, "term:K".
+/// The one printer: "fdj_nm", "eta_o", the sim::Effects name, "term:K". Nothing parses these names
+/// back: code passes FitParameter.
 [[nodiscard]] std::string fit_parameter_name(const FitParameter& p);
-
-/// The inverse of fit_parameter_name, for discovery.cpp's calls that still name parameters by string
-/// (the string overloads in resimulation.hpp); nullopt for a name no fit takes. Remove with those
-/// overloads once discovery.cpp passes FitParameter.
-[[nodiscard]] std::optional<FitParameter> find_fit_parameter(const std::string& name);
-/// find_fit_parameter; throws EmadiagError ("parameter 'x' cannot be fitted") for a name no fit takes.
-[[nodiscard]] FitParameter fit_parameter_from_name(const std::string& name);
 
 /// The range a fit keeps one parameter in (effects: inside sim::Effects::range, narrowed only where
 /// fit_parameter.cpp says why).
@@ -78,8 +70,6 @@ struct FitRange {
     double hi;
 };
 [[nodiscard]] FitRange fit_range(const FitParameter& parameter);
-/// The same by name; throws on a parameter that cannot be fitted.
-[[nodiscard]] FitRange fit_range(const std::string& name);
 /// The smallest finite-difference step of a fit along the parameter (resimulation.cpp steps by a
 /// fraction of the value, at least this).
 [[nodiscard]] double fit_step_floor(const FitParameter& parameter);
@@ -89,12 +79,5 @@ struct FitRange {
 /// inside fit_range). A term index beyond the model's terms throws EmadiagError.
 [[nodiscard]] double get_parameter(const sim::EmaParams& p, const FitParameter& parameter);
 void set_parameter(sim::EmaParams& p, const FitParameter& parameter, double value);
-
-/// By name (fit_parameter_from_name), for discovery.cpp until it passes FitParameter: the name
-/// "term:K" of FitParameter::term(K), whether a name is one, and get/set_parameter by name.
-[[nodiscard]] bool is_term_parameter(const std::string& name);
-[[nodiscard]] std::string term_parameter(std::size_t index);
-[[nodiscard]] double get_parameter(const sim::EmaParams& p, const std::string& name);
-void set_parameter(sim::EmaParams& p, const std::string& name, double value);
 
 }  // namespace emadiag::discovery

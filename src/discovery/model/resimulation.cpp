@@ -22,13 +22,6 @@ namespace {
 /// fit_step_floor of the parameter.
 constexpr double kStepRel = 0.005;
 
-std::vector<FitParameter> parameters_from_names(const std::vector<std::string>& names) {
-    std::vector<FitParameter> out;
-    out.reserve(names.size());
-    for (const auto& n : names) out.push_back(fit_parameter_from_name(n));
-    return out;
-}
-
 double rms(double sum_sq, std::size_t n) { return n ? std::sqrt(sum_sq / static_cast<double>(n)) : 0.0; }
 
 /// Threads for a batch of re-simulations (two cores is what a ramp laptop has).
@@ -471,14 +464,6 @@ FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const 
         fr.values.emplace_back(parameter, get_parameter(p, parameter), std::sqrt(std::max(0.0, cov(j, j))));
     }
     return fr;
-}
-
-FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
-                              const std::vector<std::string>& names, const std::vector<char>& mask,
-                              double fsj_base_nm, std::size_t window_samples, const sim::EmaParams* reference,
-                              int max_iterations, const NoiseFloor* trajectory_floor) {
-    return fit_by_resimulation(run, measured, start, parameters_from_names(names), mask, fsj_base_nm, window_samples,
-                               reference, max_iterations, trajectory_floor);
 }
 
 }  // namespace emadiag::discovery

@@ -86,9 +86,6 @@ struct FittedValue {
     FittedValue() = default;
     FittedValue(const FitParameter& fitted, double v, double se)
         : parameter(fitted), name(fit_parameter_name(fitted)), value(v), std_error(se) {}
-    /// For discovery.cpp, which still names parameters by string (fit_parameter_from_name).
-    FittedValue(const std::string& fitted_name, double v, double se)
-        : FittedValue(fit_parameter_from_name(fitted_name), v, se) {}
 
     FitParameter parameter = FitParameter::fdj();
     std::string name;  ///< fit_parameter_name(parameter): what reports and JSON show
@@ -121,14 +118,6 @@ struct FitResult {
 /// crosses zero, docs/discovery.md "Low-speed friction by the trajectory").
 [[nodiscard]] FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
                                             const std::vector<FitParameter>& parameters, const std::vector<char>& mask,
-                                            double fsj_base_nm, std::size_t window_samples = kFitWindowSamples,
-                                            const sim::EmaParams* reference = nullptr,
-                                            int max_iterations = kMaxFitIterations,
-                                            const NoiseFloor* trajectory_floor = nullptr);
-/// The same with the parameters by name (fit_parameter_from_name), for discovery.cpp until it passes
-/// FitParameter.
-[[nodiscard]] FitResult fit_by_resimulation(const Run& run, const RunSignals& measured, const sim::EmaParams& start,
-                                            const std::vector<std::string>& names, const std::vector<char>& mask,
                                             double fsj_base_nm, std::size_t window_samples = kFitWindowSamples,
                                             const sim::EmaParams* reference = nullptr,
                                             int max_iterations = kMaxFitIterations,

@@ -201,15 +201,15 @@ double signature_amplitude(EffectKind kind, double sim_value, double j_kgm2) {
     }
 }
 
-std::vector<std::string> fitted_sim_effects(EffectKind kind) {
+std::vector<FittedEffect> fitted_sim_effects(EffectKind kind) {
     switch (kind) {
-        case EffectKind::Viscous: return {"viscous"};
-        case EffectKind::Stribeck: return {"stribeck_amplitude", "stribeck_speed"};
-        case EffectKind::Spall: return {"spall_amplitude", "spall_center", "spall_width"};
-        case EffectKind::Ripple: return {"ripple_amplitude"};
-        case EffectKind::CurrentGain: return {"current_gain_error"};
-        case EffectKind::HingeOffset: return {"hinge_offset"};
-        case EffectKind::Inertia: return {"true_inertia"};
+        case EffectKind::Viscous: return {FittedEffect::Viscous};
+        case EffectKind::Stribeck: return {FittedEffect::StribeckAmplitude, FittedEffect::StribeckSpeed};
+        case EffectKind::Spall: return {FittedEffect::SpallAmplitude, FittedEffect::SpallCenter, FittedEffect::SpallWidth};
+        case EffectKind::Ripple: return {FittedEffect::RippleAmplitude};
+        case EffectKind::CurrentGain: return {FittedEffect::CurrentGainError};
+        case EffectKind::HingeOffset: return {FittedEffect::HingeOffset};
+        case EffectKind::Inertia: return {FittedEffect::TrueInertia};
     }
     return {};
 }

@@ -16,6 +16,7 @@
 // T_F, so to T_R; ripple adds to the motor torque, so it subtracts from T_R; a current gain error
 // scales the measured I, so T_R gains e k_t I_true = a k_t I_measured; a hinge offset shifts the
 // measured H, so T_R loses offset / tau; an inertia error leaves (J_true - J) dw/dt in T_R.
+#include "discovery/model/fit_parameter.hpp"
 #include "discovery/model/run_signals.hpp"
 
 #include <string>
@@ -51,14 +52,15 @@ struct EffectShape {
 /// The amplitude's physical sign constraint: +1 must be > 0, 0 either sign.
 [[nodiscard]] int amplitude_sign(EffectKind kind);
 
-/// sim::Effects values (name used by Effects::set, value) of a hypothesis with amplitude a.
+/// sim::Effects values (name used by Effects::set, value) of a hypothesis with amplitude a: the
+/// fitted ones first, in the order of fitted_sim_effects, then the scanned ones (ripple periods).
 [[nodiscard]] std::vector<std::pair<std::string, double>> sim_effects(const EffectShape& shape, double amplitude,
                                                                       double j_kgm2);
 /// The signature amplitude of a fitted sim::Effects amplitude value (inverse of sim_effects).
 [[nodiscard]] double signature_amplitude(EffectKind kind, double sim_value, double j_kgm2);
-/// The sim::Effects names a re-simulation fit varies for this kind (amplitude first, then the
+/// The sim::Effects a re-simulation fit varies for this kind (amplitude first, then the
 /// continuous shape parameters; ripple periods stay at the scanned integer).
-[[nodiscard]] std::vector<std::string> fitted_sim_effects(EffectKind kind);
+[[nodiscard]] std::vector<FittedEffect> fitted_sim_effects(EffectKind kind);
 /// A short text of the shape ("w_s = 50 rad/s"), empty for linear candidates.
 [[nodiscard]] std::string shape_text(const EffectShape& shape);
 

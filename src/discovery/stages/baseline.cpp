@@ -102,8 +102,8 @@ void baseline_stage(Context& ctx) {
     rep.model.error_before = model_error(s, base_sim, mask);
     rep.model.error_after = rep.model.error_before;
 
-    ctx.health_names = {"fdj_nm"};
-    if (eta_free) ctx.health_names.push_back("eta_o");
+    ctx.health_parameters = {FitParameter::fdj()};
+    if (eta_free) ctx.health_parameters.push_back(FitParameter::eta_o());
     ctx.library = ctx.options.open_world ? generated_library(s) : std::vector<TermFamily>{};
     ctx.floor = noise_floor(s, base_sim, mask);
     rep.floor = ctx.floor;

@@ -25,7 +25,7 @@ struct Context {
     NoiseFloor floor;                ///< the run's own noise floor
     double fsj_base_nm = 0;          ///< FSJ estimated or datasheet; the model keeps FSJ >= FDJ
     bool eta_free = false;           ///< eta_O is estimated on this run
-    std::vector<std::string> health_names;  ///< the health parameters fitted with every effect
+    std::vector<FitParameter> health_parameters;  ///< the health parameters fitted with every effect
     std::vector<TermFamily> library;        ///< the generated term library (open world)
 
     // The model being built: its parameters, its re-simulation and its trajectory error.

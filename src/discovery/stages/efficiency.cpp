@@ -36,7 +36,7 @@ void efficiency_stage(Context& ctx) {
     sim::EmaParams& p = ctx.params;
     DiscoveryReport& rep = ctx.rep;
     std::vector<HealthValue>& health = ctx.health();
-    std::vector<std::string>& health_names = ctx.health_names;
+    std::vector<FitParameter>& health_parameters = ctx.health_parameters;
     // Efficiency or friction: an eta_O off the datasheet may be a friction the model lacks that follows
     // the load on this run. Settled before the sensor stage: the angle residual such a friction leaves
     // (about a drift) is not a sensor's.
@@ -63,7 +63,7 @@ void efficiency_stage(Context& ctx) {
         in.mask = mask;
         in.residual_nm.resize(s.size());
         for (std::size_t k = 0; k < s.size(); ++k) in.residual_nm[k] = s.residual_torque_nm[k] - ds_sim.residual_torque_nm[k];
-        for (auto& col : sensitivities(run, p_ds, ds_sim, {"fdj_nm"})) in.base_columns.push_back(std::move(col));
+        for (auto& col : sensitivities(run, p_ds, ds_sim, {FitParameter::fdj()})) in.base_columns.push_back(std::move(col));
         for (const auto& a : accepted) in.base_columns.push_back(signature(s, a));
         for (const auto& c : term_columns) in.base_columns.push_back(c);
         // Friction-like families only: what eta_O stands for opposes the motion.
@@ -81,9 +81,9 @@ void efficiency_stage(Context& ctx) {
         } else {
             sim::EmaParams start = p_ds;
             start.fsj_nm = std::max(fsj_base_nm, start.fdj_nm);
-            std::vector<std::string> names = {"fdj_nm"};
+            std::vector<FitParameter> names = {FitParameter::fdj()};
             for (const auto& t : refine_period(s, in, *best, kEfficiencyScreenSeed)) {
-                names.push_back(term_parameter(start.terms.size()));
+                names.push_back(FitParameter::term(start.terms.size()));
                 start.terms.push_back(t);
             }
             try {
@@ -119,7 +119,7 @@ void efficiency_stage(Context& ctx) {
                         rep.model.term_texts.push_back(tn.text);
                     }
                     // The stages after this one keep eta_O at the datasheet value.
-                    std::erase(health_names, std::string("eta_o"));
+                    std::erase(health_parameters, FitParameter::eta_o());
                 }
                 const std::string costs = "trajectory cost " + fmt3(ea.cost_model) + " with eta_O " + fmt3(ea.eta_o) + ", " +
                                           fmt3(ea.cost_alternative) + " with eta_O " + fmt3(eta_ds) + " and " + ea.change;

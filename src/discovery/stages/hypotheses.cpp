@@ -112,7 +112,7 @@ void refit_close_hypotheses_on_trajectory(const Context& ctx, DiscoveryStep& st,
     const RunSignals& s = ctx.signals;
     const NoiseFloor& floor = ctx.floor;
     const double fsj_base_nm = ctx.fsj_base_nm;
-    const std::vector<std::string>& health_names = ctx.health_names;
+    const std::vector<FitParameter>& health_parameters = ctx.health_parameters;
     if (st.hypotheses.size() < 2) return;
     std::vector<std::size_t> order(st.hypotheses.size());
     for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
@@ -134,12 +134,12 @@ void refit_close_hypotheses_on_trajectory(const Context& ctx, DiscoveryStep& st,
     if (!(lo > kHypothesisRefitAboveCost && hi < kHypothesisRefitRatio * lo)) return;
     for (std::size_t i : {a, b}) {
         const FitResult& f = fit_of(i);
-        std::vector<std::string> names = health_names;
+        std::vector<FitParameter> names = health_parameters;
         if (const std::optional<EffectShape> e = effect_of(i)) {
-            for (const auto& n : fitted_sim_effects(e->kind)) names.push_back(n);
+            for (const FittedEffect n : fitted_sim_effects(e->kind)) names.push_back(FitParameter::effect(n));
         }
         const std::size_t n_terms = terms_of(i);
-        for (std::size_t k = f.params.terms.size() - n_terms; k < f.params.terms.size(); ++k) names.push_back(term_parameter(k));
+        for (std::size_t k = f.params.terms.size() - n_terms; k < f.params.terms.size(); ++k) names.push_back(FitParameter::term(k));
         try {
             const FitResult r = fit_by_resimulation(ctx.run, s, f.params, names, ctx.mask, fsj_base_nm, kFitWindowSamples, nullptr,
                                                     kFinalRefitIterations, &floor);

@@ -36,11 +36,11 @@ struct LowSpeedResult {
 /// The linearised screen over the scanned speeds (st.ranking, best delta BIC first); false, with the
 /// verdict, when no speed passes or the trajectory's excess over the floor is too small for the fits.
 bool screen_stribeck(LowSpeedStage& st, const TrajectoryLinearisation& lin, const std::vector<EffectShape>& grid,
-                     const std::vector<std::string>& model_names) {
+                     const std::vector<FitParameter>& model_parameters) {
     st.simulations += lin.simulations;
     const auto n_rows = lin.e.size();
     st.rows = static_cast<std::size_t>(n_rows);
-    const auto nh = static_cast<Eigen::Index>(model_names.size());
+    const auto nh = static_cast<Eigen::Index>(model_parameters.size());
     const Eigen::VectorXd& e0 = lin.e0;
     const double rss0 = lin.rss0;
     const double dn = static_cast<double>(n_rows);
@@ -131,8 +131,8 @@ void evaluate_profile(const Context& ctx, const sim::EmaParams& p, const Traject
     std::vector<sim::EmaParams> params;
     for (auto& pt : pts) {
         pt.params = p;
-        set_parameter(pt.params, "stribeck_amplitude", pt.amplitude);
-        set_parameter(pt.params, "stribeck_speed", pt.w_s);
+        set_parameter(pt.params, FitParameter::effect(FittedEffect::StribeckAmplitude), pt.amplitude);
+        set_parameter(pt.params, FitParameter::effect(FittedEffect::StribeckSpeed), pt.w_s);
         pt.params.fsj_nm = std::max(fsj_base_nm, pt.params.fdj_nm);
         params.push_back(pt.params);
     }
@@ -273,7 +273,7 @@ ProfileEstimate estimate_from_profile(const std::vector<ProfilePoint>& coarse, c
 
 /// The model's own parameters fitted on the trajectory without and with the Stribeck friction at the
 /// profile's estimate, and the verdict.
-void fit_stribeck(const Context& ctx, LowSpeedResult& out, const ProfileEstimate& pe, const std::vector<std::string>& model_names,
+void fit_stribeck(const Context& ctx, LowSpeedResult& out, const ProfileEstimate& pe, const std::vector<FitParameter>& model_parameters,
                   const sim::EmaParams& p, double cost_now, std::size_t grid_size) {
     const Run& run = ctx.run;
     const RunSignals& s = ctx.signals;
@@ -285,17 +285,17 @@ void fit_stribeck(const Context& ctx, LowSpeedResult& out, const ProfileEstimate
     const double w_hat = pe.w_hat, a_hat = pe.a_hat, x_se = pe.x_se, ln_a_se = pe.ln_a_se;
     sim::EmaParams start = p;
     start.fsj_nm = std::max(fsj_base_nm, start.fdj_nm);
-    const FitResult health_fit = fit_by_resimulation(run, s, start, model_names, mask, fsj_base_nm, kFitWindowSamples,
+    const FitResult health_fit = fit_by_resimulation(run, s, start, model_parameters, mask, fsj_base_nm, kFitWindowSamples,
                                                      nullptr, kMaxFitIterations, &floor);
     // The model's own parameters refitted on the trajectory with the Stribeck friction at the profile's
     // estimate (a smooth, well-conditioned fit).
     start = health_fit.params;
-    set_parameter(start, "stribeck_amplitude", a_hat);
-    set_parameter(start, "stribeck_speed", w_hat);
-    out.fit = fit_by_resimulation(run, s, start, model_names, mask, fsj_base_nm, kFitWindowSamples, nullptr,
+    set_parameter(start, FitParameter::effect(FittedEffect::StribeckAmplitude), a_hat);
+    set_parameter(start, FitParameter::effect(FittedEffect::StribeckSpeed), w_hat);
+    out.fit = fit_by_resimulation(run, s, start, model_parameters, mask, fsj_base_nm, kFitWindowSamples, nullptr,
                                   kMaxFitIterations, &floor);
-    out.fit.values.push_back({"stribeck_amplitude", a_hat, a_hat * ln_a_se});
-    out.fit.values.push_back({"stribeck_speed", w_hat, w_hat * x_se});
+    out.fit.values.push_back({FitParameter::effect(FittedEffect::StribeckAmplitude), a_hat, a_hat * ln_a_se});
+    out.fit.values.push_back({FitParameter::effect(FittedEffect::StribeckSpeed), w_hat, w_hat * x_se});
     st.simulations += health_fit.simulations + out.fit.simulations;
     const double rows = static_cast<double>(out.fit.rows);
     st.cost_health_only = health_fit.cost_end / rows;
@@ -332,11 +332,11 @@ void fit_stribeck(const Context& ctx, LowSpeedResult& out, const ProfileEstimate
 }
 
 /// Screens the Stribeck friction on the trajectory (linearised: one re-simulation per scanned speed,
-/// with the columns of the model's own parameters `model_names`: FDJ, eta_O and the coefficients of
+/// with the columns of the model's own parameters `model_parameters`: FDJ, eta_O and the coefficients of
 /// the effects and terms already added), and when a speed passes, fits it by re-simulation on the
 /// trajectory together with the model's parameters, against those parameters alone: the question is
 /// whether the model needs the Stribeck friction once everything it has is fitted to the trajectory.
-LowSpeedResult low_speed_fit(const Context& ctx, const std::vector<std::string>& model_names, const sim::EmaParams& p,
+LowSpeedResult low_speed_fit(const Context& ctx, const std::vector<FitParameter>& model_parameters, const sim::EmaParams& p,
                              const RunSignals& model_sim, double cost_now) {
     const Run& run = ctx.run;
     const RunSignals& s = ctx.signals;
@@ -347,16 +347,16 @@ LowSpeedResult low_speed_fit(const Context& ctx, const std::vector<std::string>&
     st.ran = true;
     st.cost_before = cost_now;
     const std::vector<EffectShape> grid = shape_grid(EffectKind::Stribeck, s);
-    const TrajectoryLinearisation lin = linearise_over_shapes(run, s, floor, fsj_base_nm, model_names, p, model_sim, grid,
+    const TrajectoryLinearisation lin = linearise_over_shapes(run, s, floor, fsj_base_nm, model_parameters, p, model_sim, grid,
                                                               kLowSpeedProbeNm, [](sim::EmaParams& q, const EffectShape& shape) {
                                                                   q.effects.stribeck_amplitude_nm = kLowSpeedProbeNm;
                                                                   q.effects.stribeck_speed_rad_s = shape.shape1;
                                                               });
-    if (!screen_stribeck(st, lin, grid, model_names)) return out;
+    if (!screen_stribeck(st, lin, grid, model_parameters)) return out;
     const auto [coarse, fine] = stribeck_profile(ctx, p, lin, grid, st);
-    const ProfileEstimate pe = estimate_from_profile(coarse, fine, grid, st, static_cast<Eigen::Index>(model_names.size()),
+    const ProfileEstimate pe = estimate_from_profile(coarse, fine, grid, st, static_cast<Eigen::Index>(model_parameters.size()),
                                                      static_cast<double>(lin.e.size()));
-    fit_stribeck(ctx, out, pe, model_names, p, cost_now, grid.size());
+    fit_stribeck(ctx, out, pe, model_parameters, p, cost_now, grid.size());
     return out;
 }
 
@@ -395,8 +395,8 @@ void low_speed_stage(Context& ctx) {
             p_base.effects.stribeck_amplitude_nm = 0.0;
             base_sim_ls = run_signals(resimulate(run, p_base));
         }
-        const std::vector<std::string> model_names = own_parameter_names(ctx, p, EffectKind::Stribeck);
-        LowSpeedResult ls = low_speed_fit(ctx, model_names, p_base, base_sim_ls, trajectory_error(s, base_sim_ls, floor).cost);
+        const std::vector<FitParameter> model_parameters = own_parameters(ctx, p, EffectKind::Stribeck);
+        LowSpeedResult ls = low_speed_fit(ctx, model_parameters, p_base, base_sim_ls, trajectory_error(s, base_sim_ls, floor).cost);
         rep.low_speed = ls.stage;
         if (stribeck_by_torque) {
             rep.low_speed.refit_of_torque = true;

@@ -24,9 +24,9 @@ constexpr int kRippleFitIterations = 6;
 constexpr double kRippleTorqueMinZ = 1.96;
 
 /// The ripple at the trajectory's best period (`shape`, amplitude `best_amp` from the linearised
-/// screen `lin` over `grid_size` periods) fitted on the trajectory with the model's own parameters `model_names`, against those
+/// screen `lin` over `grid_size` periods) fitted on the trajectory with the model's own parameters `model_parameters`, against those
 /// parameters alone; added to the model (a step of its own) when it is confirmed. Returns the verdict.
-std::string fit_ripple(Context& ctx, const TrajectoryLinearisation& lin, const std::vector<std::string>& model_names,
+std::string fit_ripple(Context& ctx, const TrajectoryLinearisation& lin, const std::vector<FitParameter>& model_parameters,
                        const EffectShape& shape, double best_amp, std::size_t grid_size) {
     const Run& run = ctx.run;
     const RunSignals& s = ctx.signals;
@@ -45,8 +45,8 @@ std::string fit_ripple(Context& ctx, const TrajectoryLinearisation& lin, const s
     start.effects.ripple_amplitude_nm = std::max(best_amp, kMinEffectPeakNm);
     start.effects.ripple_periods_per_rev = shape.shape1;
     start.fsj_nm = std::max(fsj_base_nm, start.fdj_nm);
-    std::vector<std::string> names = model_names;
-    names.push_back("ripple_amplitude");
+    std::vector<FitParameter> names = model_parameters;
+    names.push_back(FitParameter::effect(FittedEffect::RippleAmplitude));
     DiscoveryStep step;
     step.trajectory_before = traj_now.cost;
     try {
@@ -106,11 +106,11 @@ std::string ripple_verdict(Context& ctx) {
     const sim::EmaParams& p = ctx.params;
     const RunSignals& model_sim = ctx.model_sim;
     const std::vector<EffectShape>& accepted = ctx.accepted;
-    const std::vector<std::string>& health_names = ctx.health_names;
+    const std::vector<FitParameter>& health_parameters = ctx.health_parameters;
     const std::vector<std::vector<double>>& term_columns = ctx.term_columns;
-    const std::vector<std::string> model_names = own_parameter_names(ctx, p);
+    const std::vector<FitParameter> model_parameters = own_parameters(ctx, p);
     const std::vector<EffectShape> grid = shape_grid(EffectKind::Ripple, s);
-    const TrajectoryLinearisation lin = linearise_over_shapes(run, s, floor, fsj_base_nm, model_names, p, model_sim, grid,
+    const TrajectoryLinearisation lin = linearise_over_shapes(run, s, floor, fsj_base_nm, model_parameters, p, model_sim, grid,
                                                               kRippleProbeNm, [](sim::EmaParams& q, const EffectShape& shape) {
                                                                   q.effects.ripple_amplitude_nm = kRippleProbeNm;
                                                                   q.effects.ripple_periods_per_rev = shape.shape1;
@@ -153,7 +153,7 @@ std::string ripple_verdict(Context& ctx) {
         rin.mask = mask;
         rin.residual_nm.resize(s.size());
         for (std::size_t k = 0; k < s.size(); ++k) rin.residual_nm[k] = s.residual_torque_nm[k] - model_sim.residual_torque_nm[k];
-        for (auto& col : sensitivities(run, p, model_sim, health_names)) rin.base_columns.push_back(std::move(col));
+        for (auto& col : sensitivities(run, p, model_sim, health_parameters)) rin.base_columns.push_back(std::move(col));
         for (const auto& a : accepted) rin.base_columns.push_back(signature(s, a));
         for (const auto& c : term_columns) rin.base_columns.push_back(c);
         torque_at = evidence_at(s, rin, grid[best]);
@@ -174,7 +174,7 @@ std::string ripple_verdict(Context& ctx) {
                                                   fmt3(torque_ripple->amplitude_se) + " N m") +
                   "); left to the structure report";
     } else {
-        verdict = fit_ripple(ctx, lin, model_names, grid[best], best_amp, grid.size());
+        verdict = fit_ripple(ctx, lin, model_parameters, grid[best], best_amp, grid.size());
     }
     return verdict;
 }

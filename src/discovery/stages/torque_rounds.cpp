@@ -103,7 +103,7 @@ ScreenInput round_screen_input(const Context& ctx) {
     in.mask = ctx.mask;
     in.residual_nm.resize(s.size());
     for (std::size_t k = 0; k < s.size(); ++k) in.residual_nm[k] = s.residual_torque_nm[k] - model_sim.residual_torque_nm[k];
-    for (auto& col : sensitivities(ctx.run, ctx.params, model_sim, ctx.health_names)) in.base_columns.push_back(std::move(col));
+    for (auto& col : sensitivities(ctx.run, ctx.params, model_sim, ctx.health_parameters)) in.base_columns.push_back(std::move(col));
     for (const auto& a : accepted) {
         in.base_columns.push_back(signature(s, a));
         in.exclude.push_back(a.kind);
@@ -204,7 +204,7 @@ void take_step(Context& ctx, DiscoveryStep& step, const RoundFit& rf, const Gene
         EffectShape shape = *step.added;
         accepted.push_back(shape);
         for (const auto& f : fit.values) {
-            if (f.name != "fdj_nm" && f.name != "eta_o") rep.model.terms.push_back({effect_field(f.name), f.value, f.std_error});
+            if (f.parameter.kind() == FitParameter::Kind::Effect) rep.model.terms.push_back({effect_field(effect_name(f.parameter.fitted_effect())), f.value, f.std_error});
         }
         if (shape.kind == EffectKind::Ripple) rep.model.terms.push_back({effect_field("ripple_periods"), shape.shape1, 0.0});
     } else {
