@@ -81,9 +81,9 @@ std::vector<TermFamily> generated_library(const RunSignals& s) {
     for (const auto& m : monomials) {
         for (int friction = 0; friction < 2; ++friction) {
             std::vector<TermFactor> f = m;
+            bool folded = false;
             if (friction) {
                 // sgn(w) w = |w| and sgn(w) |w| = w; otherwise sgn(w) is a factor of its own.
-                bool folded = false;
                 for (auto& x : f) {
                     if (x.signal == TermSignal::Speed && x.basis == TermBasis::Identity) {
                         x.basis = TermBasis::Abs;
@@ -98,12 +98,12 @@ std::vector<TermFamily> generated_library(const RunSignals& s) {
             Term t = term_of(f);
             const std::string text = t.basis_text();
             if (!seen.insert(text).second) continue;
-            lib.push_back({text, {{t}}, 0});
+            lib.push_back({text, {{t}}, 0, friction == 1 && !folded});  // sgn(w) a factor of its own
         }
     }
     // Periodic bases: sin and cos together (amplitude and phase), period scanned.
     auto periodic = [&](TermSignal sig, const std::vector<double>& periods, bool friction, const std::string& name) {
-        TermFamily fam{name, {}, 1};
+        TermFamily fam{name, {}, 1, friction};
         for (double p : periods) {
             std::vector<Term> block;
             for (TermBasis b : {TermBasis::Sin, TermBasis::Cos}) {

@@ -23,6 +23,7 @@ struct TermFamily {
     std::string name;                              ///< e.g. "sgn(w)*abs(theta_u)", "sin/cos(theta_u, P)"
     std::vector<std::vector<sim::Term>> shapes;    ///< blocks of torque terms with coefficient 1
     int scanned = 0;                               ///< scanned shape parameters (BIC penalty)
+    bool opposes_motion = false;                   ///< friction-like: sgn(w) times a shape (a torque that opposes the motion)
 };
 
 /// The generated library for a run (bump centres from the angles it visits).

@@ -69,7 +69,7 @@ void efficiency_stage(Context& ctx) {
         // Friction-like families only: what eta_O stands for opposes the motion.
         std::vector<TermFamily> friction;
         for (const auto& f : library) {
-            if (f.name.rfind("sgn(w)*", 0) == 0) friction.push_back(f);
+            if (f.opposes_motion) friction.push_back(f);
         }
         const GenericScreen screen = friction.empty() ? GenericScreen{} : screen_generated(s, in, friction, kEfficiencyScreenSeed);
         const GenericEvidence* best = !screen.ranking.empty() && screen.ranking.front().accepted ? &screen.ranking.front() : nullptr;
