@@ -6,6 +6,7 @@
 
 #include "emadiag/calc/civil_days.hpp"
 #include "emadiag/calc/inverse_variance.hpp"
+#include "emadiag/record/estimator_method.hpp"
 
 #include <algorithm>
 #include <string_view>
@@ -14,8 +15,6 @@ namespace emadiag::db {
 using namespace detail;
 
 namespace {
-/// Estimators whose findings are measurements (the network findings are the verdict's cross-check).
-constexpr std::string_view kPhysicsPrefix = "physics";
 
 /// Days since 1970 of "YYYY-MM-DDThh:mm:ss..." (checked by check_session; fractions of a second ignored).
 double utc_days(const std::string& iso) {
@@ -195,7 +194,8 @@ std::vector<SessionMeasurement> session_measurements(const std::vector<StoredFin
             it->m.limit_kind = f.limit_kind;
             it->m.limit_value = f.limit_value;
         }
-        if (f.estimator.rfind(kPhysicsPrefix, 0) != 0 || !f.value) continue;
+        // Physics findings are the measurements (the network findings are the verdict's cross-check).
+        if (estimator_method_of(f.estimator) != EstimatorMethod::Physics || !f.value) continue;
         if (!f.std_error || !calc::is_weightable(*f.std_error)) continue;
         it->mean.add(*f.value, *f.std_error);
     }

@@ -3,29 +3,19 @@
 namespace emadiag {
 namespace {
 
-constexpr char kSequenceSeparator = ':';
-constexpr EstimatorMethod kMethods[] = {EstimatorMethod::Physics, EstimatorMethod::Network};
 constexpr sim::Sequence kSequences[] = {sim::Sequence::Dyn, sim::Sequence::Brk, sim::Sequence::Sweep};
 
 }  // namespace
 
-std::string to_string(EstimatorMethod m) { return m == EstimatorMethod::Physics ? "physics" : "network"; }
-
-std::optional<EstimatorMethod> parse_estimator_method(std::string_view text) {
-    for (const EstimatorMethod m : kMethods)
-        if (text == to_string(m)) return m;
-    return std::nullopt;
-}
-
 std::string to_string(const EstimatorId& e) {
     std::string s = to_string(e.method);
-    if (e.sequence) s += kSequenceSeparator + sim::to_string(*e.sequence);
+    if (e.sequence) s += kEstimatorSequenceSeparator + sim::to_string(*e.sequence);
     return s;
 }
 
 std::optional<EstimatorId> parse_estimator_id(std::string_view text) {
-    const auto sep = text.find(kSequenceSeparator);
-    const auto method = parse_estimator_method(text.substr(0, sep));
+    const auto sep = text.find(kEstimatorSequenceSeparator);
+    const auto method = estimator_method_of(text);
     if (!method) return std::nullopt;
     if (sep == std::string_view::npos) return EstimatorId{*method, std::nullopt};
     // Exactly the printer's text: the sequence's own lower-case name.

@@ -3,6 +3,7 @@
 // session's finding the sequence of the run it came from. Typed between the modules; text only at the
 // edges (CLI, JSON, database), through the one printer and the one parser below:
 //   method "physics" | "network";  finding "physics:dyn", "network:brk", ...
+#include "emadiag/record/estimator_method.hpp"
 #include "emadiag/sim/simulator.hpp"
 
 #include <optional>
@@ -11,12 +12,7 @@
 
 namespace emadiag {
 
-enum class EstimatorMethod { Physics, Network };
-
-/// "physics" or "network".
-[[nodiscard]] std::string to_string(EstimatorMethod m);
-/// The one parser of a method's text; nullopt for any other text.
-[[nodiscard]] std::optional<EstimatorMethod> parse_estimator_method(std::string_view text);
+// EstimatorMethod, its printer and its parser: emadiag/record/estimator_method.hpp (the record reads it too).
 
 /// A finding's estimator: the method, and the sequence of the run it came from.
 struct EstimatorId {
