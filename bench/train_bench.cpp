@@ -30,8 +30,8 @@ constexpr std::uint64_t kSeed = 5;
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wrestrict"
 const emadiag::FeatureSet& table5_features(emadiag::NetworkSpec& spec) {
-    spec.load_case = "B";
-    spec.sequence = "dyn";
+    spec.load_case = emadiag::sim::LoadCase::B;
+    spec.sequence = emadiag::sim::Sequence::Dyn;
     spec.timesteps = kTimesteps;
     spec.hidden_neurons = kNeurons;
     spec.outputs = {emadiag::kParamFdj, emadiag::kParamEtaO};

@@ -36,9 +36,9 @@ struct TrainCliOptions {
 /// The initial weights are seeded with seed + 1, which must not wrap.
 constexpr std::uint64_t kMaxTrainSeed = std::numeric_limits<std::uint64_t>::max() - 1;
 
-std::vector<std::string> default_outputs(const std::string& load_case) {
+std::vector<std::string> default_outputs(sim::LoadCase load_case) {
     // The paper: case A predicts FDJ only (3.2); A-ext and B predict FDJ and eta_O (3.3, 3.4).
-    if (load_case == "A") return {kParamFdj};
+    if (load_case == sim::LoadCase::A) return {kParamFdj};
     return {kParamFdj, kParamEtaO};
 }
 
@@ -83,8 +83,8 @@ const bool registered = register_command(Command{
             io::check_output_path<EmadiagError>(o->out, "network model", io::OutputInputs({o->dataset}));
             const Dataset d = read_dataset(o->dataset);  // every sample finite, labels in range (dataset.hpp)
             TrainOptions t;
-            t.spec.load_case = sim::to_string(d.spec.load_case);
-            t.spec.sequence = sim::to_string(d.spec.sequence);
+            t.spec.load_case = d.spec.load_case;
+            t.spec.sequence = d.spec.sequence;
             t.spec.timesteps = o->timesteps;
             t.spec.hidden_neurons = o->neurons;
             t.spec.with_speed = o->with_speed;
@@ -105,8 +105,8 @@ const bool registered = register_command(Command{
             rep.model.training["noise"] = sim::to_string(d.spec.noise);
             rep.model.save(o->out, io::OutputInputs({o->dataset}));
             std::printf("trained %d-%d-%zu network on case %s, sequence %s, noise %s: %d runs (%zu/%zu/%zu)\n",
-                        t.spec.input_count(), t.spec.hidden_neurons, t.spec.outputs.size(), t.spec.load_case.c_str(),
-                        t.spec.sequence.c_str(), sim::to_string(d.spec.noise).c_str(), static_cast<int>(f.x.cols()),
+                        t.spec.input_count(), t.spec.hidden_neurons, t.spec.outputs.size(), sim::to_string(t.spec.load_case).c_str(),
+                        sim::to_string(t.spec.sequence).c_str(), sim::to_string(d.spec.noise).c_str(), static_cast<int>(f.x.cols()),
                         rep.split.train.size(), rep.split.validation.size(), rep.split.test.size());
             std::printf("SCG: %d epochs, best epoch %d, stop: %s, %.2f s\n", rep.scg.epochs, rep.scg.best_epoch,
                         rep.scg.stop_reason.c_str(), rep.train_time_s);

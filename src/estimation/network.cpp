@@ -3,6 +3,7 @@
 
 #include "core/emadiag_error.hpp"
 #include "core/residual_torque.hpp"
+#include "emadiag/sim/sim_error.hpp"
 #include "estimation/dataset.hpp"
 #include "estimation/network_kernels.hpp"
 
@@ -38,7 +39,7 @@ double satlins(double n) { return std::clamp(n, -1.0, 1.0); }
 int NetworkSpec::input_count() const { return timesteps * (1 + (with_speed ? 1 : 0) + (with_load ? 1 : 0)); }
 
 nlohmann::json NetworkSpec::to_json() const {
-    return {{"case", load_case},         {"sequence", sequence},   {"timesteps", timesteps},
+    return {{"case", sim::to_string(load_case)}, {"sequence", sim::to_string(sequence)}, {"timesteps", timesteps},
             {"with_speed", with_speed},  {"with_load", with_load}, {"hidden_neurons", hidden_neurons},
             {"outputs", outputs},        {"resample", resample}};
 }
@@ -46,8 +47,9 @@ nlohmann::json NetworkSpec::to_json() const {
 NetworkSpec NetworkSpec::from_json(const nlohmann::json& j, const std::string& where) {
     NetworkSpec s;
     try {
-        s.load_case = j.at("case").get<std::string>();
-        s.sequence = j.at("sequence").get<std::string>();
+        // The one parser of each, at the edge (the model JSON).
+        s.load_case = sim::parse_load_case(j.at("case").get<std::string>());
+        s.sequence = sim::parse_sequence(j.at("sequence").get<std::string>());
         s.timesteps = j.at("timesteps").get<int>();
         s.with_speed = j.at("with_speed").get<bool>();
         s.with_load = j.at("with_load").get<bool>();
@@ -55,6 +57,8 @@ NetworkSpec NetworkSpec::from_json(const nlohmann::json& j, const std::string& w
         s.outputs = j.at("outputs").get<std::vector<std::string>>();
         s.resample = j.value("resample", std::string("linear"));
     } catch (const nlohmann::json::exception& e) {
+        throw EmadiagError(where + ": " + e.what());
+    } catch (const sim::SimError& e) {
         throw EmadiagError(where + ": " + e.what());
     }
     constexpr int kMinTimesteps = 2;

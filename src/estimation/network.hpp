@@ -26,8 +26,8 @@ namespace emadiag {
 
 /// What a network reads and predicts.
 struct NetworkSpec {
-    std::string load_case = "B";      ///< "A", "A-ext", "B"
-    std::string sequence = "dyn";     ///< "dyn", "brk", "sweep"
+    sim::LoadCase load_case = sim::LoadCase::B;   ///< the model JSON's "case": "A", "A-ext", "B"
+    sim::Sequence sequence = sim::Sequence::Dyn;  ///< the model JSON's "sequence": "dyn", "brk", "sweep"
     int timesteps = 500;              ///< N: T_R resampled to N points
     bool with_speed = false;          ///< also speed resampled to N points
     bool with_load = false;           ///< also F_R = H / tau resampled to N points

@@ -64,11 +64,6 @@ std::vector<std::string> model_problems(const nlohmann::json& j, const NetworkMo
     return out;
 }
 
-std::string lower(std::string s) {
-    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    return s;
-}
-
 }  // namespace
 
 nlohmann::json NetworkModel::to_json() const {
@@ -147,10 +142,10 @@ void NetworkModel::save(const std::string& path, const io::OutputInputs& inputs)
 }
 
 std::vector<double> NetworkModel::predict_normalised(const Run& run) const {
-    const std::string run_case = sim::to_string(run.load_case), run_sequence = sim::to_string(run.sequence);
-    if (lower(run_case) != lower(spec.load_case) || lower(run_sequence) != lower(spec.sequence)) {
-        throw EmadiagError("the network model was trained on case " + spec.load_case + ", sequence " + spec.sequence +
-                           "; the run is case " + run_case + ", sequence " + run_sequence);
+    if (run.load_case != spec.load_case || run.sequence != spec.sequence) {
+        throw EmadiagError("the network model was trained on case " + sim::to_string(spec.load_case) + ", sequence " +
+                           sim::to_string(spec.sequence) + "; the run is case " + sim::to_string(run.load_case) +
+                           ", sequence " + sim::to_string(run.sequence));
     }
     const Eigen::VectorXd x = network_features(run, spec);
     for (Eigen::Index i = 0; i < x.size(); ++i) {
@@ -172,7 +167,7 @@ HealthEstimate NetworkModel::estimate(const Run& run) const {
         }
         return std::nullopt;
     };
-    const std::string why = "not identifiable: the network (case " + spec.load_case + ") does not predict it";
+    const std::string why = "not identifiable: the network (case " + sim::to_string(spec.load_case) + ") does not predict it";
     for (const HealthParameter parameter : kHealthParameters) {
         const char* name = to_string(parameter);
         ParameterEstimate p;

@@ -32,7 +32,7 @@ std::optional<std::string> shipped_model_for(const Run& run, std::vector<std::st
         for (const auto& f : files) {
             try {
                 const NetworkModel m = NetworkModel::load(f.string());
-                if (m.spec.load_case != sim::to_string(run.load_case) || m.spec.sequence != sim::to_string(run.sequence)) continue;
+                if (m.spec.load_case != run.load_case || m.spec.sequence != run.sequence) continue;
                 if (!first_match) first_match = f.string();
                 if (m.training.is_object() && m.training.value("noise", std::string{}) == wanted_noise) return f.string();
             } catch (const std::exception& e) {

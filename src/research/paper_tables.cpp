@@ -193,7 +193,7 @@ struct Context {
         std::vector<int> test;
         for (int i : row.rep.split.test) test.push_back(i);
         if (opt.physics) row.physics = eval_physics(d, test, t.spec.outputs);
-        say("trained " + t.spec.load_case + "/" + t.spec.sequence + " " + sim::to_string(d.spec.noise) + " " +
+        say("trained " + sim::to_string(t.spec.load_case) + "/" + sim::to_string(t.spec.sequence) + " " + sim::to_string(d.spec.noise) + " " +
             std::to_string(t.spec.timesteps) + "x" + std::to_string(runs_used) + "x" +
             std::to_string(t.spec.hidden_neurons) + ": test MSE " + sci(row.rep.mse.test) + " in " +
             secs(row.rep.train_time_s) + ", physics " + sci(row.physics.mse));
@@ -204,8 +204,8 @@ struct Context {
 NetworkSpec make_spec(const std::string& c, const std::string& s, int timesteps, int neurons,
                       std::vector<std::string> outputs) {
     NetworkSpec spec;
-    spec.load_case = c;
-    spec.sequence = s;
+    spec.load_case = sim::parse_load_case(c);
+    spec.sequence = sim::parse_sequence(s);
     spec.timesteps = timesteps;
     spec.hidden_neurons = neurons;
     spec.outputs = std::move(outputs);
@@ -372,11 +372,11 @@ void calibration_section(std::ostringstream& md, Context& cx, const TableRows& r
     long fresh_covered = 0, fresh_pairs = 0;
     std::map<std::string, std::pair<Dataset, Dataset>> fresh;  // key case/sequence: clean, typical
     const auto cov_row = [&](const char* name, const NetRow& n, const NetRow& t) {
-        const std::string key = n.rep.model.spec.load_case + "/" + n.rep.model.spec.sequence;
+        const std::string key = sim::to_string(n.rep.model.spec.load_case) + "/" + sim::to_string(n.rep.model.spec.sequence);
         if (fresh.find(key) == fresh.end()) {
             DatasetSpec spec;
-            spec.load_case = sim::parse_load_case(n.rep.model.spec.load_case);
-            spec.sequence = sim::parse_sequence(n.rep.model.spec.sequence);
+            spec.load_case = n.rep.model.spec.load_case;
+            spec.sequence = n.rep.model.spec.sequence;
             spec.count = cx.runs(1000);
             spec.seed = options.seed + 7777 + fnv1a(key) % 1000;
             Dataset clean = generate_dataset(spec, options.threads);

@@ -105,7 +105,7 @@ TEST(HostileDataset, AnExceptionInAFeatureWorkerReachesTheCaller) {
     Dataset d = small_dataset(12, 20);
     for (auto& s : d.runs[5].samples) s.t_s = 1.0;
     NetworkSpec spec;
-    spec.load_case = "A";
+    spec.load_case = sim::LoadCase::A;
     spec.timesteps = 10;
     spec.outputs = {kParamFdj};
     for (const unsigned threads : {1u, 2u, 4u}) {
@@ -117,7 +117,7 @@ TEST(HostileDataset, AnExceptionInAFeatureWorkerReachesTheCaller) {
 
 TrainOptions sound_options() {
     TrainOptions t;
-    t.spec.load_case = "A";
+    t.spec.load_case = sim::LoadCase::A;
     t.spec.timesteps = 10;
     t.spec.hidden_neurons = 2;
     t.spec.outputs = {kParamFdj};

@@ -221,7 +221,7 @@ class ShippedModelTest : public ::testing::TestWithParam<ShippedModel> {};
 TEST_P(ShippedModelTest, LoadsAndPredictsASimulatedRunWithinItsUncertainty) {
     const ShippedModel m = GetParam();
     const NetworkModel model = NetworkModel::load(model_path(m.file));
-    EXPECT_EQ(model.spec.load_case, sim::to_string(m.load_case));
+    EXPECT_EQ(model.spec.load_case, m.load_case);
     // A run the model never saw, at an off-nominal health state.
     sim::SimConfig c;
     c.load_case = m.load_case;
