@@ -125,14 +125,14 @@ void say_recording(const TestRunRecord& rec, const Say& say) {
     const auto& lp = rec.outcome.loop;
     std::ostringstream bus_line;
     bus_line.precision(3);
-    bus_line << "  " << rec.sequence << ": bus " << lp.frames_received << " frames in " << lp.wall_s << " s ("
+    bus_line << "  " << sim::to_string(rec.sequence) << ": bus " << lp.frames_received << " frames in " << lp.wall_s << " s ("
              << (lp.wall_s > 0 ? static_cast<double>(lp.frames_received) / lp.wall_s : 0.0) << " frames/s, "
              << lp.receive_calls << " receive calls), tool CPU "
              << (lp.frames_received > 0 ? 1e6 * lp.cpu_s / static_cast<double>(lp.frames_received) : 0.0)
              << " us/frame; heartbeat " << lp.heartbeat.sent << " sent, longest gap "
              << static_cast<double>(lp.heartbeat.max_gap.count()) / 1000.0 << " ms"
              << (lp.heartbeat.realtime ? " (SCHED_FIFO)" : " (normal priority)");
-    say("  " + rec.sequence + ": " + rec.outcome.status + ", " + std::to_string(st.samples_complete) + " of " +
+    say("  " + sim::to_string(rec.sequence) + ": " + rec.outcome.status + ", " + std::to_string(st.samples_complete) + " of " +
         std::to_string(st.samples_expected) + " samples, " + std::to_string(st.frames_lost) + " frames lost, " +
         std::to_string(st.crc_failures) + " CRC failures, " + std::to_string(st.duplicates) + " duplicates; raw log " + rec.log_path);
     say(bus_line.str());
@@ -144,7 +144,7 @@ void say_signals(const TestRunRecord& rec, const Say& say) {
     const RunSummary sum = summarise(rec.outcome.run);
     std::ostringstream line;
     line.precision(4);
-    line << "  " << rec.sequence << ": peak current " << sum.peak_current_a << " A, surface " << sum.min_surface_deg << " .. "
+    line << "  " << sim::to_string(rec.sequence) << ": peak current " << sum.peak_current_a << " A, surface " << sum.min_surface_deg << " .. "
          << sum.max_surface_deg << " deg";
     if (sum.tr_plateau_down_nm && sum.tr_plateau_up_nm)
         line << ", T_R (eq. 7) " << *sum.tr_plateau_down_nm << " N m moving down, " << *sum.tr_plateau_up_nm << " N m moving up";
@@ -159,7 +159,7 @@ void store_result(std::optional<db::Database>& database, SessionSpool& spool, co
     std::string done;
     for (const auto& r : result.runs) {
         if (r.estimates) add_model_artifacts(stored, r.estimates->model_files);
-        done += (done.empty() ? "" : ", ") + r.sequence;
+        done += (done.empty() ? "" : ", ") + sim::to_string(r.sequence);
     }
     stored.work_performed = "ground test run over CAN (" + options.phase + "): " + (done.empty() ? std::string("no sequence") : done) +
                             "; estimates (physics, network)" +
@@ -203,7 +203,7 @@ Assessment assess_records(const std::vector<TestRunRecord>& runs, const HealthLi
         // An attempt followed by a retry of the same sequence is superseded by it.
         if (i + 1 < runs.size() && runs[i + 1].sequence == r.sequence) continue;
         AssessedRun a;
-        a.sequence = sim::parse_sequence(r.sequence);  // the record's text (sequence_name or the spool manifest)
+        a.sequence = r.sequence;
         const RunValidity v = r.outcome.valid ? run_validity(r.outcome.run) : RunValidity{};
         a.valid = r.outcome.valid && v.valid && r.estimate_error.empty();
         a.invalid_reason = !r.outcome.valid ? r.outcome.status + (r.outcome.invalid_reason.empty() ? "" : ": " + r.outcome.invalid_reason)
@@ -297,10 +297,10 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
         bool stop = false;
         for (int attempt = 1; attempt <= 2; ++attempt) {
             TestRunRecord rec;
-            rec.sequence = sequence_name(seq);
+            rec.sequence = can_tool::run_sequence_of(seq);
             rec.attempt = attempt;
             const std::filesystem::path stem =
-                options.out_dir / (stem_prefix + rec.sequence + (attempt > 1 ? "_attempt" + std::to_string(attempt) : std::string()));
+                options.out_dir / (stem_prefix + sim::to_string(rec.sequence) + (attempt > 1 ? "_attempt" + std::to_string(attempt) : std::string()));
             const std::string log_name = stem.filename().string() + ".log";
             rec.log_path = (spool_dir / log_name).string();
             rec.csv_path = stem.string() + ".csv";
@@ -310,8 +310,8 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
             ro.log_path = rec.log_path;
             ro.answer_timeout = options.answer_timeout;
             ro.shared_heartbeat = &heartbeat;
-            spool.add_log(SpooledLog{rec.sequence, attempt, log_name});
-            say("running " + rec.sequence + (attempt > 1 ? " again" : "") + " (session " + std::to_string(ro.session_id) + ") on " +
+            spool.add_log(SpooledLog{sim::to_string(rec.sequence), attempt, log_name});
+            say("running " + sim::to_string(rec.sequence) + (attempt > 1 ? " again" : "") + " (session " + std::to_string(ro.session_id) + ") on " +
                 bus.spec());
             try {
                 can_tool::Recorder recorder(bus, ro);
@@ -322,7 +322,7 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
                 // sequence's partial log when it holds a run (the EMA identified itself and the
                 // sequence started).
                 failure = without_prefix(e.what());
-                failed_sequence = rec.sequence;
+                failed_sequence = sim::to_string(rec.sequence);
                 stop = true;
                 keep_partial_run(rec, options, log_name, failure, result);
                 break;
@@ -337,11 +337,11 @@ TestRunResult run_test(can::CanBus& bus, const TestRunOptions& options, const st
             if (rec.outcome.valid) {
                 say_signals(rec, say);
                 session_parts::estimate(rec, model ? &*model : nullptr);
-                if (!rec.estimate_error.empty()) say("  " + rec.sequence + ": not estimated: " + rec.estimate_error);
+                if (!rec.estimate_error.empty()) say("  " + sim::to_string(rec.sequence) + ": not estimated: " + rec.estimate_error);
             }
             const bool retry = !rec.outcome.valid && rec.outcome.transient_loss && attempt == 1 && options.retry_transient && !interrupt.load();
             if (retry)
-                say("  " + rec.sequence + ": invalid after a transient loss (" + rec.outcome.invalid_reason + "); running " + rec.sequence +
+                say("  " + sim::to_string(rec.sequence) + ": invalid after a transient loss (" + rec.outcome.invalid_reason + "); running " + sim::to_string(rec.sequence) +
                     " once more");
             stop = interrupt.load() || (!rec.outcome.valid && !retry);
             result.runs.push_back(std::move(rec));

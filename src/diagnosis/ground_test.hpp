@@ -63,7 +63,7 @@ struct TestRunOptions {
 };
 
 struct TestRunRecord {
-    std::string sequence;
+    sim::Sequence sequence = sim::Sequence::Dyn;  ///< the run's sequence (text only where it is shown or spooled)
     int attempt = 1;
     can_tool::RecordOutcome outcome;
     std::string log_path, csv_path;

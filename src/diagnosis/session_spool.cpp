@@ -285,7 +285,7 @@ void recover_one(db::Database& database, const std::filesystem::path& dir, const
     }
     for (const auto& l : m.logs) {
         TestRunRecord rec;
-        rec.sequence = l.sequence;
+        rec.sequence = sim::parse_sequence(l.sequence);  // the manifest's text, by the one parser
         rec.attempt = l.attempt;
         rec.log_path = l.log_path;
         // Only a file inside this spool directory (never one a manifest names elsewhere: its bytes

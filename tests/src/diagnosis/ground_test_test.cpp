@@ -77,8 +77,8 @@ TEST_F(TestRun, HealthyEmaIsServiceableAndEverythingIsStoredUnderTheTail) {
     const TestRunResult r = run_test(tool, o, interrupt_);
     EXPECT_EQ(r.assessment.verdict, Verdict::Serviceable) << r.assessment.reason;
     ASSERT_EQ(r.runs.size(), 2u);
-    EXPECT_EQ(r.runs[0].sequence, "dyn");
-    EXPECT_EQ(r.runs[1].sequence, "brk");
+    EXPECT_EQ(sim::to_string(r.runs[0].sequence), "dyn");
+    EXPECT_EQ(sim::to_string(r.runs[1].sequence), "brk");
     for (const auto& run : r.runs) {
         EXPECT_TRUE(run.outcome.valid) << run.outcome.invalid_reason;
         EXPECT_TRUE(run.estimates.has_value()) << run.estimate_error;
@@ -286,10 +286,10 @@ TEST_F(TestRun, TransientLossIsRunOnceMoreAndBothAttemptsAreStored) {
     EXPECT_FALSE(r.runs[0].outcome.valid);
     EXPECT_TRUE(r.runs[0].outcome.transient_loss);
     EXPECT_EQ(r.runs[0].outcome.stats.frames_lost, 50u);
-    EXPECT_EQ(r.runs[1].sequence, "dyn");
+    EXPECT_EQ(sim::to_string(r.runs[1].sequence), "dyn");
     EXPECT_EQ(r.runs[1].attempt, 2);
     EXPECT_TRUE(r.runs[1].outcome.valid);
-    EXPECT_EQ(r.runs[2].sequence, "brk");
+    EXPECT_EQ(sim::to_string(r.runs[2].sequence), "brk");
     EXPECT_EQ(ema.stats().sequences_started, 3u);
     bool told = false;
     for (const auto& l : said) told = told || l.find("running dyn once more") != std::string::npos;
