@@ -22,10 +22,7 @@ Run make_run(const sim::SimConfig& config, const sim::SimResult& result) {
         if (v != defaults.get(name)) run.set_meta("effect_" + name, format_exact(v));
     }
     for (std::size_t i = 0; i < p.terms.size(); ++i) run.set_meta("effect_term_" + std::to_string(i + 1), p.terms[i].text());
-    run.samples.reserve(result.samples.size());
-    for (const auto& s : result.samples) {
-        run.samples.push_back(RunSample{s.t_s, s.current_a, s.speed_rad_s, s.theta_m_rad, s.hinge_moment_nm, s.command_deg});
-    }
+    run.samples = result.samples;
     return run;
 }
 

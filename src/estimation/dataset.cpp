@@ -130,10 +130,7 @@ Run Dataset::run(std::size_t i) const {
     r.set_required_meta();
     r.set_meta("noise", sim::to_string(spec.noise));
     r.set_meta("seed", std::to_string(runs[i].noise_seed));
-    r.samples.reserve(runs[i].samples.size());
-    for (const auto& s : runs[i].samples) {
-        r.samples.push_back(RunSample{s.t_s, s.current_a, s.speed_rad_s, s.theta_m_rad, s.hinge_moment_nm, s.command_deg});
-    }
+    r.samples = runs[i].samples;
     return r;
 }
 

@@ -1,10 +1,10 @@
 #pragma once
 // One sample of a test run: the six signals of ema-reference.md section 6, each a 2 kHz period
-// mean. The one shape of a run's sample in memory and in the maintenance record (core::Run's
-// samples and db::StoredRun's are this type), so no layer copies it field by field.
-// Header-only and in the lowest layer, because the record (maintenance_db) sits below core.
-// The other shapes of a run are kept for their own jobs: sim::Sample is the simulator's output
-// with its truth; discovery's RunSignals are the same signals as columns for the fits.
+// mean. The one shape of a run's sample from the simulator to the maintenance record: sim::Sample,
+// core's Run samples and db::StoredRun's samples are this type, so no layer copies it field by field.
+// Header-only and in the lowest layer, because the record (maintenance_db) and the simulator sit
+// below core. The other shape is kept for its own job: discovery's RunSignals hold the same
+// signals (and derived ones) as columns for the fits; the simulator's truth is sim::SampleTruth.
 
 namespace emadiag {
 

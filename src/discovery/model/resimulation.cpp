@@ -49,10 +49,7 @@ RunSignals finish_resimulation_signals(const ResimTarget& target, const sim::Sim
     check_resimulation(target, r);
     Run bare;
     bare.constants = target.constants;
-    bare.samples.reserve(r.samples.size());
-    for (const auto& x : r.samples) {
-        bare.samples.push_back(RunSample{x.t_s, x.current_a, x.speed_rad_s, x.theta_m_rad, x.hinge_moment_nm, x.command_deg});
-    }
+    bare.samples = r.samples;
     return unchecked_run_signals(bare);
 }
 

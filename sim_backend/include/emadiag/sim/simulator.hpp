@@ -1,6 +1,7 @@
 #pragma once
 // The EMA-REF-1 plant and controller (ema-reference.md sections 3 to 7), integrated at dt.
 // One step function serves the scalar and the batched paths; they differ only in lane width.
+#include "emadiag/record/run_sample.hpp"
 #include "emadiag/sim/ema_params.hpp"
 
 #include <cstdint>
@@ -63,15 +64,9 @@ struct SimConfig {
 };
 
 /// One 2 kHz sample (section 6): time at the end of the period, period means of I, w and H,
-/// theta_m at the end of the period, and the command.
-struct Sample {
-    double t_s = 0;
-    double current_a = 0;
-    double speed_rad_s = 0;
-    double theta_m_rad = 0;
-    double hinge_moment_nm = 0;
-    double command_deg = 0;
-};
+/// theta_m at the end of the period, and the command. The simulator's sample is the run's sample
+/// (emadiag/record/run_sample.hpp): one shape from the simulator to the maintenance record.
+using Sample = ::emadiag::RunSample;
 
 /// What the simulator knows and a measurement does not: period means of the exact torques.
 struct SampleTruth {
