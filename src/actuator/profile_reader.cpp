@@ -1,3 +1,4 @@
+#include "emadiag/io/bounded_json.hpp"
 #include "actuator/profile_reader.hpp"
 
 #include "actuator/actuator_error.hpp"
@@ -35,15 +36,9 @@ void ProfileReader::throw_if_any() const {
 }
 
 void ProfileReader::keys(const json& obj, const std::string& path, std::initializer_list<const char*> allowed) {
-    for (auto it = obj.begin(); it != obj.end(); ++it) {
-        bool known = false;
-        for (const char* a : allowed) known = known || it.key() == a;
-        if (!known) {
-            std::string list;
-            for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-            problem(path + "/" + it.key(), "unknown key (known here: " + list + ")");
-        }
-    }
+    io::for_each_unknown_key(obj, allowed, [&](const std::string& key, const std::string& known) {
+        problem(path + "/" + key, "unknown key (known here: " + known + ")");
+    });
     for (const char* a : allowed) {
         if (!obj.contains(a)) problem(child(path, a), "missing (every key is required: write null for a value that is unknown)");
     }

@@ -37,15 +37,9 @@ public:
 
     /// Keys of `obj` outside `allowed` are problems (a misspelt key would otherwise be ignored).
     void only_keys(const json& obj, const std::string& path, std::initializer_list<const char*> allowed) {
-        for (auto it = obj.begin(); it != obj.end(); ++it) {
-            bool known = false;
-            for (const char* a : allowed) known = known || it.key() == a;
-            if (!known) {
-                std::string list;
-                for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-                problem(path + "/" + it.key(), "unknown key (known here: " + list + ")");
-            }
-        }
+        io::for_each_unknown_key(obj, allowed, [&](const std::string& key, const std::string& known) {
+            problem(path + "/" + key, "unknown key (known here: " + known + ")");
+        });
     }
 
     std::optional<std::string> string_at(const json& obj, const std::string& path, const char* key, bool required) {

@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <fstream>
+#include <initializer_list>
 #include <optional>
 #include <string>
 #include <set>
@@ -121,6 +122,21 @@ inline constexpr std::size_t kMaxJsonBytes = std::size_t{16} << 20;
     std::string text;
     if (!read_bounded_text_file(path, text, error)) return std::nullopt;
     return parse_bounded_json(text, error);
+}
+
+/// Calls problem(key, known) for every key of the object `obj` outside `allowed`, where `known` is
+/// the allowed keys as "a, b, c" (a misspelt key in a schema file would otherwise be ignored).
+template <class Problem>
+void for_each_unknown_key(const nlohmann::json& obj, std::initializer_list<const char*> allowed, Problem&& problem) {
+    for (auto it = obj.begin(); it != obj.end(); ++it) {
+        bool known = false;
+        for (const char* a : allowed) known = known || it.key() == a;
+        if (!known) {
+            std::string list;
+            for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+            problem(it.key(), list);
+        }
+    }
 }
 
 }  // namespace emadiag::io
